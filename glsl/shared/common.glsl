@@ -1,0 +1,78 @@
+// Constants, random numbers and small math helpers shared by every kernel.
+#ifndef ILLUM_COMMON_GLSL
+#define ILLUM_COMMON_GLSL
+
+const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
+const float INF = 1.0 / 0.0;
+
+// Deterministic per-sample random stream: the state depends only on (seed, pixel, sample index),
+// so any split of a render into sample ranges or tiles reproduces exactly the same samples.
+uint hash_u32(uint x) {  // lowbias32 (Wellons)
+    x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16;
+    return x;
+}
+struct Rng { uint state; };
+Rng rng_init(uint seed_lo, uint seed_hi, uint pixel, uint sample_index) {
+    uint h = hash_u32(seed_lo ^ hash_u32(seed_hi + 0x9e3779b9u));
+    h = hash_u32(h ^ pixel);
+    h = hash_u32(h ^ (sample_index * 0x85ebca6bu + 0x68e31da4u));
+    return Rng(h);
+}
+// PCG-RXS-M-XS 32; returns a float in [0, 1) built from 24 bits, so 1 - u >= 2^-24 (never log(0)).
+float rng_next(inout Rng r) {
+    r.state = r.state * 747796405u + 2891336453u;
+    uint w = ((r.state >> ((r.state >> 28u) + 4u)) ^ r.state) * 277803737u;
+    w = (w >> 22u) ^ w;
+    return float(w >> 8) * (1.0 / 16777216.0);
+}
+vec2 rng_next2(inout Rng r) { return vec2(rng_next(r), rng_next(r)); }
+
+// True for NaN and +-Inf; a bit test, since isnan/isinf may be folded away by the compiler.
+bool non_finite(float x) { return (floatBitsToUint(x) & 0x7fffffffu) >= 0x7f800000u; }
+bool non_finite(vec3 v) { return non_finite(v.x) || non_finite(v.y) || non_finite(v.z); }
+
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+// Orthonormal basis around a unit vector (Duff et al. 2017).
+void make_basis(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+// Concentric map of the unit square onto the unit disk (Shirley & Chiu 1997).
+vec2 concentric_disk(vec2 u) {
+    vec2 o = 2.0 * u - 1.0;
+    if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
+    float r, phi;
+    if (abs(o.x) > abs(o.y)) { r = o.x; phi = (PI / 4.0) * (o.y / o.x); }
+    else { r = o.y; phi = PI / 2.0 - (PI / 4.0) * (o.x / o.y); }
+    return r * vec2(cos(phi), sin(phi));
+}
+
+// Cosine-weighted hemisphere about +z; pdf = cos(theta) / pi.
+vec3 cosine_hemisphere(vec2 u) {
+    vec2 d = concentric_disk(u);
+    return vec3(d, sqrt(max(0.0, 1.0 - dot(d, d))));
+}
+
+// Ray origin offset off a surface (Waechter & Binder 2019, Ray Tracing Gems ch. 6): integer ULPs
+// along the geometric normal, which scales with the magnitude of p; a float offset near the origin.
+vec3 offset_ray_origin(vec3 p, vec3 ng) {
+    const float origin = 1.0 / 32.0;
+    const float float_scale = 1.0 / 65536.0;
+    const float int_scale = 256.0;
+    ivec3 of_i = ivec3(int_scale * ng);
+    vec3 p_i = vec3(
+        intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
+        intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),
+        intBitsToFloat(floatBitsToInt(p.z) + ((p.z < 0.0) ? -of_i.z : of_i.z)));
+    return vec3(abs(p.x) < origin ? p.x + float_scale * ng.x : p_i.x,
+                abs(p.y) < origin ? p.y + float_scale * ng.y : p_i.y,
+                abs(p.z) < origin ? p.z + float_scale * ng.z : p_i.z);
+}
+
+#endif

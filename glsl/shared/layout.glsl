@@ -1,0 +1,175 @@
+// The layout contract between Rust (src/layout.rs) and every kernel: structs, bindings, constants.
+// `#define NAME <integer>` lines are turned into Rust constants by build.rs; the structs are mirrored
+// by #[repr(C)] types in src/layout.rs, and tests/layout.rs checks every size and offset against the
+// offsets glslang emits for glsl/tests/layout_check.comp. Scalar block layout everywhere; fields are
+// ordered so that std430 would give the same offsets.
+#ifndef ILLUM_LAYOUT_GLSL
+#define ILLUM_LAYOUT_GLSL
+
+// Descriptor set 0.
+#define BINDING_FRAME 0
+#define BINDING_FILM 1
+#define BINDING_TLAS 2
+
+// Specialization constants.
+#define SPEC_FEATURES 0
+
+// Feature bits: what a scene uses. Kernels test them against the FEATURES specialization constant,
+// so code for absent features is folded away at pipeline creation.
+#define FEATURE_MESHES 1
+#define FEATURE_SHAPES 2
+#define FEATURE_AREA_LIGHTS 4
+#define FEATURE_DOME 8
+#define FEATURE_SUN 16
+#define FEATURE_TEXTURES 32
+
+#define WORKGROUP_X 8
+#define WORKGROUP_Y 8
+
+// Analytic shape kinds (GpuShape.kind).
+#define SHAPE_SPHERE 0
+#define SHAPE_RECT 1
+#define SHAPE_DISK 2
+
+// Light kinds (GpuLight.kind).
+#define LIGHT_RECT 0
+#define LIGHT_DISK 1
+#define LIGHT_SPHERE 2
+#define LIGHT_DOME 3
+#define LIGHT_SUN 4
+
+#define LIGHT_FLAG_TWO_SIDED 1
+#define LIGHT_FLAG_VISIBLE 2
+
+// Microfacet models (GpuLobe.distribution) and Fresnel kinds (GpuLobe.fresnel).
+#define DIST_DBRDF 0
+#define DIST_BECKMANN_SMITH 1
+#define DIST_GGX_SMITH 2
+#define FRESNEL_CONSTANT 0
+#define FRESNEL_SCHLICK 1
+#define FRESNEL_CONDUCTOR 2
+
+#define MATERIAL_FLAG_TWO_SIDED 1
+#define MATERIAL_FLAG_TANGENT_DIR 2
+
+#define INSTANCE_FLAG_NORMALS 1
+#define INSTANCE_FLAG_UVS 2
+#define INSTANCE_FLAG_TANGENTS 4
+
+// Ray masks: camera rays see geometry and visible light shapes; shadow rays see geometry only
+// (lights do not occlude each other, the convention of TECHNIQUES.md 3.3).
+#define MASK_GEOMETRY 1
+#define MASK_LIGHTS 2
+
+// Hit kinds reported by the trace interface.
+#define HIT_NONE 0
+#define HIT_TRIANGLE 1
+#define HIT_SHAPE 2
+
+#define NONE 0xffffffff
+
+// Per-render constants (uniform buffer). Positions are camera-relative: the host subtracts the
+// camera position in double precision, so large world coordinates keep their precision here.
+struct Frame {
+    vec4 cam_forward;     // xyz: unit view direction
+    vec4 cam_right;       // xyz: right, scaled by tan(fov_y / 2) * aspect
+    vec4 cam_up;          // xyz: up, scaled by tan(fov_y / 2)
+    uvec4 size;           // width, height, light count, shape count
+    uvec4 counts;         // instance count, material count, texture count, dome light index or NONE
+    uint64_t instances;   // device addresses of the scene buffers (0 when absent)
+    uint64_t vertices;
+    uint64_t indices;
+    uint64_t materials;
+    uint64_t shapes;
+    uint64_t lights;
+    uint64_t textures;
+    uint64_t texels;
+};
+
+// Per-dispatch constants.
+struct PassConstants {
+    uint first_sample;    // index of the first sample of this dispatch (per pixel)
+    uint sample_count;    // samples per pixel in this dispatch
+    uint seed_lo;
+    uint seed_hi;
+    uvec4 tile;           // x0, y0, width, height of the pixel rectangle of this dispatch
+};
+
+struct GpuVertex {
+    vec3 position;
+    float u;
+    vec3 normal;
+    float v;
+    vec4 tangent;         // xyz, w = handedness
+};
+
+struct GpuInstance {
+    vec4 object_to_world[3];  // rows of the 3x4 object-to-world matrix (camera-relative)
+    vec4 normal_to_world[3];  // rows of the inverse transpose of its 3x3 part
+    uint first_index;         // first index of the mesh in the index buffer
+    uint first_vertex;        // added to every index of the mesh
+    uint material;
+    uint flags;               // INSTANCE_FLAG_*
+};
+
+struct GpuShape {
+    vec4 p0;   // sphere: centre, radius; rect: centre; disk: centre, radius
+    vec4 p1;   // rect: full edge u; disk: unit normal
+    vec4 p2;   // rect: full edge v; disk: unit tangent
+    uint kind;       // SHAPE_*
+    uint material;   // NONE for light shapes
+    uint light;      // index of the light it is the surface of, or NONE
+    uint flags;
+};
+
+struct GpuLobe {
+    vec4 fresnel0;   // constant colour, Schlick f0, or conductor eta
+    vec4 fresnel1;   // conductor k
+    vec2 alpha;      // roughness along tangent and bitangent
+    uint distribution;
+    uint fresnel;
+};
+
+struct GpuMaterial {
+    vec3 diffuse;
+    uint diffuse_texture;
+    vec3 emission;
+    uint emission_texture;
+    vec3 tangent_dir;
+    uint flags;
+    uint lobe_count;
+    uint metallic_roughness_texture;
+    uint pad0;
+    uint pad1;
+    GpuLobe lobes[2];
+};
+
+struct GpuLight {
+    vec4 p0;   // rect: centre; disk/sphere: centre, radius; dome: cos, sin of rotation; sun: direction, cos(theta_max)
+    vec4 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
+    vec4 p2;   // rect: full edge v; disk: unit tangent
+    vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence)
+    uint kind;       // LIGHT_*
+    uint texture;    // NONE or texture index
+    uint shape;      // index of its GpuShape when visible to the camera, else NONE
+    uint flags;      // LIGHT_FLAG_*
+    float area;      // surface area (rect, disk, sphere)
+};
+
+struct GpuTexture {
+    uint offset;     // first texel in the texel buffer
+    uint width;
+    uint height;
+    uint flags;
+};
+
+// Accumulated per pixel over all samples so far (sums, divided by the sample count on readback).
+struct FilmPixel {
+    vec4 beauty;     // rgb sum
+    vec4 beauty_sq;  // rgb sum of squares (for the variance of the mean)
+    vec4 albedo;     // rgb sum over samples that hit a surface; w = number of such samples
+    vec4 normal;     // xyz sum of shading normals; w = sum of hit distances
+    vec4 emission;   // rgb sum of directly seen emission; w = samples with non-finite beauty
+};
+
+#endif

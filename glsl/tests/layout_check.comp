@@ -1,0 +1,30 @@
+// Every shared struct in a buffer, so that glslang emits its member offsets and array stride into
+// the SPIR-V; tests/layout.rs compares them with the Rust mirrors in src/layout.rs.
+#version 460
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#include "layout.glsl"
+layout(local_size_x = 1) in;
+layout(scalar, binding = 0) buffer B0 { Frame frame_v[]; };
+layout(scalar, binding = 1) buffer B1 { PassConstants pass_v[]; };
+layout(scalar, binding = 2) buffer B2 { GpuVertex vertex_v[]; };
+layout(scalar, binding = 3) buffer B3 { GpuInstance instance_v[]; };
+layout(scalar, binding = 4) buffer B4 { GpuShape shape_v[]; };
+layout(scalar, binding = 5) buffer B5 { GpuLobe lobe_v[]; };
+layout(scalar, binding = 6) buffer B6 { GpuMaterial material_v[]; };
+layout(scalar, binding = 7) buffer B7 { GpuLight light_v[]; };
+layout(scalar, binding = 8) buffer B8 { GpuTexture texture_v[]; };
+layout(scalar, binding = 9) buffer B9 { FilmPixel film_v[]; };
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    frame_v[i + 1] = frame_v[i];
+    pass_v[i + 1] = pass_v[i];
+    vertex_v[i + 1] = vertex_v[i];
+    instance_v[i + 1] = instance_v[i];
+    shape_v[i + 1] = shape_v[i];
+    lobe_v[i + 1] = lobe_v[i];
+    material_v[i + 1] = material_v[i];
+    light_v[i + 1] = light_v[i];
+    texture_v[i + 1] = texture_v[i];
+    film_v[i + 1] = film_v[i];
+}

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Installs what a fresh Debian 12 (bookworm) machine lacks to build and test illum.
+# Idempotent: safe to run again. Needs root (or sudo).
+#   - bookworm-backports (deb822) for Mesa 25's lavapipe, which has VK_KHR_ray_query
+#   - libvulkan1, vulkan-validationlayers, g++, libshaderc-dev (linked statically by build.rs)
+#   - Debian's stock Mesa 22.3.6 lavapipe (no ray query) unpacked under .vk/mesa-stock, so the
+#     compute-BVH path can be tested on a real device that lacks the extension.
+set -euo pipefail
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+# Same mirror as the machine's own bookworm entry.
+mirror="http://deb.debian.org/debian"
+if [ -f /etc/apt/sources.list.d/debian.sources ]; then
+  m=$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources)
+  [ -n "$m" ] && mirror="$m"
+elif [ -f /etc/apt/sources.list ]; then
+  m=$(awk '$1=="deb" && $3 ~ /^bookworm$/ {print $2; exit}' /etc/apt/sources.list)
+  [ -n "$m" ] && mirror="$m"
+fi
+
+bp=/etc/apt/sources.list.d/bookworm-backports.sources
+want="Types: deb
+URIs: $mirror
+Suites: bookworm-backports
+Components: main
+Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg"
+if [ ! -f "$bp" ] || [ "$(cat "$bp")" != "$want" ]; then
+  echo "$want" | $SUDO tee "$bp" >/dev/null
+  updated=0
+fi
+
+need_pkgs=()
+for p in libvulkan1 vulkan-validationlayers g++ libshaderc-dev glslang-dev; do
+  dpkg -s "$p" >/dev/null 2>&1 || need_pkgs+=("$p")
+done
+mesa_ver=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
+case "$mesa_ver" in
+  25.*|2[6-9].*) ;;
+  *) need_mesa=1 ;;
+esac
+
+if [ "${#need_pkgs[@]}" -gt 0 ] || [ "${need_mesa:-0}" = 1 ] || [ "${updated:-1}" = 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  if [ "${#need_pkgs[@]}" -gt 0 ]; then
+    $SUDO apt-get install -y -qq --no-install-recommends "${need_pkgs[@]}"
+  fi
+  if [ "${need_mesa:-0}" = 1 ]; then
+    $SUDO apt-get install -y -qq --no-install-recommends -t bookworm-backports mesa-vulkan-drivers
+  fi
+fi
+
+# Stock bookworm lavapipe (Mesa 22.3.6, no ray query) beside the backports one.
+here=$(cd "$(dirname "$0")/.." && pwd)
+stock="$here/.vk/mesa-stock"
+if [ ! -f "$stock/icd.json" ]; then
+  tmp=$(mktemp -d)
+  (cd "$tmp" && apt-get download -qq mesa-vulkan-drivers/bookworm >/dev/null 2>&1 ||
+     { $SUDO apt-get update -qq && apt-get download -qq mesa-vulkan-drivers/bookworm; })
+  mkdir -p "$stock/root"
+  dpkg -x "$tmp"/mesa-vulkan-drivers_*.deb "$stock/root"
+  lib=$(find "$stock/root" -name 'libvulkan_lvp.so' | head -n 1)
+  cat >"$stock/icd.json" <<JSON
+{ "file_format_version": "1.0.0",
+  "ICD": { "library_path": "$lib", "api_version": "1.3.230" } }
+JSON
+  rm -rf "$tmp"
+fi
+echo "setup-debian: ok (mesa $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers); stock lavapipe at $stock)"

@@ -1,0 +1,20 @@
+//! illum: a physically based renderer on Vulkan, after "Physically Based Lighting at Pixar"
+//! (Villemin & Hery, SIGGRAPH 2013).
+//!
+//! Data flows one way: scene file → [`scene::Scene`] (validated host types) → GPU scene
+//! (buffers, acceleration structures) → integrator kernels → film → outputs.
+
+pub mod layout;
+pub mod output;
+pub mod scene;
+
+/// SPIR-V of every kernel variant, compiled by build.rs (`<KERNEL>_<VARIANT>: &[u8]`).
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}
+pub mod error;
+pub mod vk;
+
+pub use error::{Error, Result};
+pub mod render;
+pub mod trace;

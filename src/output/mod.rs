@@ -1,0 +1,193 @@
+//! Image outputs: multi-layer EXR and sRGB PNG.
+//!
+//! The EXR holds every plane of a [`Film`] as 32-bit float channels in one part, named the
+//! classic way (`R`,`G`,`B`, `Albedo.R`, `N.X`, `Z`, ...) so compositing and denoising tools
+//! find them. The PNG is a display-referred preview of the beauty only.
+
+mod openexr;
+mod png;
+
+use std::path::{Path, PathBuf};
+
+pub use openexr::{ExrImage, read_exr, write_exr};
+pub use png::write_png;
+
+/// Linear, scene-referred image planes of one render, row-major, top row first, width*height each.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Film {
+    pub width: u32,
+    pub height: u32,
+    pub beauty: Vec<[f32; 3]>,
+    /// AOV "Albedo".
+    pub albedo: Vec<[f32; 3]>,
+    /// AOV "N" (world-space shading normal, components in [-1,1]).
+    pub normal: Vec<[f32; 3]>,
+    /// AOV "Z" (distance along the camera ray; +inf where nothing was hit).
+    pub depth: Vec<f32>,
+    /// AOV "Emission" (radiance of directly seen emitters).
+    pub emission: Vec<[f32; 3]>,
+    /// AOV "Variance" (per-pixel variance of the beauty mean), when present.
+    pub variance: Option<Vec<[f32; 3]>>,
+}
+
+impl Film {
+    /// A zero-filled film without a variance plane.
+    pub fn new(width: u32, height: u32) -> Film {
+        let n = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            beauty: vec![[0.0; 3]; n],
+            albedo: vec![[0.0; 3]; n],
+            normal: vec![[0.0; 3]; n],
+            depth: vec![0.0; n],
+            emission: vec![[0.0; 3]; n],
+            variance: None,
+        }
+    }
+
+    /// Number of pixels, `width * height`.
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Checks that the film is non-empty and every plane has `width * height` pixels; `path` is
+    /// the file being written, for the error message.
+    pub(crate) fn validate(&self, path: &Path) -> Result<(), OutputError> {
+        if self.width == 0 || self.height == 0 {
+            return Err(OutputError::EmptyFilm {
+                path: path.to_path_buf(),
+                width: self.width,
+                height: self.height,
+            });
+        }
+        let expected = self.pixel_count();
+        let planes = [
+            ("beauty", self.beauty.len()),
+            ("albedo", self.albedo.len()),
+            ("normal", self.normal.len()),
+            ("depth", self.depth.len()),
+            ("emission", self.emission.len()),
+            (
+                "variance",
+                self.variance.as_ref().map_or(expected, Vec::len),
+            ),
+        ];
+        for (plane, len) in planes {
+            if len != expected {
+                return Err(OutputError::PlaneSize {
+                    path: path.to_path_buf(),
+                    plane,
+                    width: self.width,
+                    height: self.height,
+                    len,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Facts about a render, stored as EXR header attributes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImageMetadata {
+    pub spp: u32,
+    pub render_seconds: f64,
+    pub device: String,
+    pub seed: u64,
+    /// Further string attributes, e.g. `("illum.technique", "mis")`.
+    pub extra: Vec<(String, String)>,
+}
+
+/// Errors of this module. Every message names the file and includes the underlying cause, so
+/// printing the error with `{}` is enough.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write {}: the film is empty ({width}x{height})", .path.display())]
+    EmptyFilm {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+    },
+    #[error(
+        "cannot write {}: film plane `{plane}` has {len} pixels, expected {width}x{height}",
+        .path.display()
+    )]
+    PlaneSize {
+        path: PathBuf,
+        plane: &'static str,
+        width: u32,
+        height: u32,
+        len: usize,
+    },
+    #[error("cannot write {}: EXR attribute `{name}`: {reason}", .path.display())]
+    Attribute {
+        path: PathBuf,
+        name: String,
+        reason: String,
+    },
+    #[error("cannot write EXR {}: {cause}", .path.display())]
+    ExrWrite {
+        path: PathBuf,
+        cause: exr::error::Error,
+    },
+    #[error("cannot read EXR {}: {cause}", .path.display())]
+    ExrRead {
+        path: PathBuf,
+        cause: exr::error::Error,
+    },
+    #[error("cannot read EXR {}: {reason}", .path.display())]
+    ExrUnsupported { path: PathBuf, reason: String },
+    #[error(
+        "EXR {} has no RGB beauty (R/G/B or <layer>.R/G/B); its channels are: {}",
+        .path.display(), .channels.join(", ")
+    )]
+    NoBeauty {
+        path: PathBuf,
+        channels: Vec<String>,
+    },
+    #[error("cannot write PNG {}: {cause}", .path.display())]
+    Png {
+        path: PathBuf,
+        cause: image::ImageError,
+    },
+    #[error("cannot write {}: {cause}", .path.display())]
+    Io {
+        path: PathBuf,
+        cause: std::io::Error,
+    },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn film_new_is_zeroed_and_valid() {
+        let film = Film::new(3, 2);
+        assert_eq!(film.pixel_count(), 6);
+        assert!(film.beauty.iter().all(|p| *p == [0.0; 3]));
+        assert!(film.depth.iter().all(|d| *d == 0.0));
+        assert!(film.variance.is_none());
+        film.validate(Path::new("x.exr")).unwrap();
+    }
+
+    #[test]
+    fn validate_names_plane_and_file() {
+        let mut film = Film::new(3, 2);
+        film.variance = Some(vec![[0.0; 3]; 5]);
+        let msg = film
+            .validate(Path::new("dir/out.exr"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("dir/out.exr") && msg.contains("variance"),
+            "{msg}"
+        );
+        let msg = Film::new(0, 4)
+            .validate(Path::new("e.png"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("e.png") && msg.contains("0x4"), "{msg}");
+    }
+}

@@ -1,0 +1,423 @@
+//! Scene → GPU buffers. Positions become camera-relative here, in double precision, before the
+//! conversion to f32: a scene 1e5 units from the origin keeps the precision of one at the origin.
+
+use crate::error::Result;
+use crate::layout::*;
+use crate::scene::{Distribution, Fresnel, LightKind, Scene, ShapeGeometry};
+use crate::vk::{Buffer, Context};
+use ash::vk;
+use glam::{DMat3, DMat4, DVec3, Vec3};
+
+/// Index ranges of one mesh inside the shared vertex and index buffers.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshRange {
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub first_index: u32,
+    pub triangle_count: u32,
+}
+
+/// The scene in device memory, plus what the trace structures need to be built over it.
+pub struct GpuScene {
+    pub frame: Frame,
+    pub features: u32,
+    pub meshes: Vec<MeshRange>,
+    /// (mesh index, rows of the camera-relative object-to-world matrix) per instance.
+    pub instances: Vec<(u32, [[f32; 4]; 3])>,
+    /// Shapes [0, geometry_shapes) are scene geometry; the rest are visible light surfaces.
+    pub geometry_shapes: u32,
+    pub shapes: Vec<GpuShape>,
+    /// Camera position in world space: the origin of the render's coordinates.
+    pub origin: DVec3,
+    pub vertex_buffer: Option<Buffer>,
+    pub index_buffer: Option<Buffer>,
+    pub aabb_buffer: Option<Buffer>,
+    _buffers: Vec<Buffer>,
+}
+
+fn v4(v: DVec3, w: f64) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w as f32]
+}
+fn v3(v: Vec3) -> [f32; 3] {
+    v.to_array()
+}
+
+fn rows3x4(m: &DMat4) -> [[f32; 4]; 3] {
+    let r = |i: usize| {
+        let row = m.row(i);
+        [row.x as f32, row.y as f32, row.z as f32, row.w as f32]
+    };
+    [r(0), r(1), r(2)]
+}
+
+fn normal_rows(m: &DMat4) -> [[f32; 4]; 3] {
+    let n = DMat3::from_mat4(*m).inverse().transpose();
+    let r = |i: usize| {
+        let row = n.row(i);
+        [row.x as f32, row.y as f32, row.z as f32, 0.0]
+    };
+    [r(0), r(1), r(2)]
+}
+
+/// Any unit vector perpendicular to `n`.
+fn perpendicular(n: DVec3) -> DVec3 {
+    n.any_orthonormal_vector()
+}
+
+fn lobe(l: &crate::scene::SpecularLobe) -> GpuLobe {
+    let (fresnel, f0, f1) = match l.fresnel {
+        Fresnel::Constant(c) => (FRESNEL_CONSTANT, c, Vec3::ZERO),
+        Fresnel::Schlick { f0 } => (FRESNEL_SCHLICK, f0, Vec3::ZERO),
+        Fresnel::Conductor { eta, k } => (FRESNEL_CONDUCTOR, eta, k),
+    };
+    GpuLobe {
+        fresnel0: f0.extend(0.0).to_array(),
+        fresnel1: f1.extend(0.0).to_array(),
+        alpha: l.alpha.max(glam::Vec2::splat(1e-4)).to_array(),
+        distribution: match l.distribution {
+            Distribution::DBrdf => DIST_DBRDF,
+            Distribution::BeckmannSmith => DIST_BECKMANN_SMITH,
+            Distribution::GgxSmith => DIST_GGX_SMITH,
+        },
+        fresnel,
+    }
+}
+
+fn shape_aabb(s: &GpuShape) -> [f32; 6] {
+    let c = Vec3::from_slice(&s.p0[..3]);
+    let ext = match s.kind {
+        SHAPE_SPHERE => Vec3::splat(s.p0[3]),
+        SHAPE_RECT => {
+            (Vec3::from_slice(&s.p1[..3]).abs() + Vec3::from_slice(&s.p2[..3]).abs()) * 0.5
+        }
+        _ => {
+            // Disk: per axis, r * sqrt(1 - n_i^2).
+            let n = Vec3::from_slice(&s.p1[..3]);
+            (Vec3::ONE - n * n).max(Vec3::ZERO).powf(0.5) * s.p0[3]
+        }
+    };
+    // Pad by a relative epsilon so that flat shapes have volume and rounding never clips a hit.
+    let pad = ext * 1e-4 + (c.abs() + ext) * 1e-6 + Vec3::splat(1e-7);
+    let lo = c - ext - pad;
+    let hi = c + ext + pad;
+    [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]
+}
+
+impl GpuScene {
+    pub fn new(ctx: &Context, scene: &Scene, ray_query: bool) -> Result<GpuScene> {
+        let origin = scene.camera.position;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let build_input = if ray_query {
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+        } else {
+            vk::BufferUsageFlags::empty()
+        };
+        let mut features = 0;
+
+        // Meshes: one shared vertex and index buffer.
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        let mut meshes = Vec::new();
+        for m in &scene.meshes {
+            let first_vertex = vertices.len() as u32;
+            for (i, p) in m.positions.iter().enumerate() {
+                let n = m.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
+                let uv = m.uvs.as_ref().map_or(glam::Vec2::ZERO, |u| u[i]);
+                let t = m.tangents.as_ref().map_or(glam::Vec4::ZERO, |t| t[i]);
+                vertices.push(GpuVertex {
+                    position: p.to_array(),
+                    u: uv.x,
+                    normal: n.to_array(),
+                    v: uv.y,
+                    tangent: t.to_array(),
+                });
+            }
+            meshes.push(MeshRange {
+                first_vertex,
+                vertex_count: m.positions.len() as u32,
+                first_index: indices.len() as u32,
+                triangle_count: (m.indices.len() / 3) as u32,
+            });
+            indices.extend_from_slice(&m.indices);
+        }
+        let mut gpu_instances = Vec::new();
+        let mut instances = Vec::new();
+        for inst in &scene.instances {
+            let mesh = &scene.meshes[inst.mesh as usize];
+            let range = meshes[inst.mesh as usize];
+            let rel = DMat4::from_translation(-origin) * inst.transform;
+            let mut flags = 0;
+            if mesh.normals.is_some() {
+                flags |= INSTANCE_FLAG_NORMALS;
+            }
+            if mesh.uvs.is_some() {
+                flags |= INSTANCE_FLAG_UVS;
+            }
+            if mesh.tangents.is_some() {
+                flags |= INSTANCE_FLAG_TANGENTS;
+            }
+            gpu_instances.push(GpuInstance {
+                object_to_world: rows3x4(&rel),
+                normal_to_world: normal_rows(&rel),
+                first_index: range.first_index,
+                first_vertex: range.first_vertex,
+                material: mesh.material,
+                flags,
+            });
+            instances.push((inst.mesh, rows3x4(&rel)));
+        }
+        if !instances.is_empty() {
+            features |= FEATURE_MESHES;
+        }
+
+        // Analytic shapes: scene geometry first, then the visible surfaces of area lights.
+        let mut shapes: Vec<GpuShape> = Vec::new();
+        let shape_of = |g: &ShapeGeometry, material: u32, light: u32| -> GpuShape {
+            match g {
+                ShapeGeometry::Sphere { center, radius } => GpuShape {
+                    p0: v4(*center - origin, *radius),
+                    kind: SHAPE_SPHERE,
+                    material,
+                    light,
+                    ..Default::default()
+                },
+                ShapeGeometry::Rect { center, u, v } => GpuShape {
+                    p0: v4(*center - origin, 0.0),
+                    p1: v4(*u, 0.0),
+                    p2: v4(*v, 0.0),
+                    kind: SHAPE_RECT,
+                    material,
+                    light,
+                    ..Default::default()
+                },
+                ShapeGeometry::Disk {
+                    center,
+                    normal,
+                    radius,
+                } => GpuShape {
+                    p0: v4(*center - origin, *radius),
+                    p1: v4(normal.normalize(), 0.0),
+                    p2: v4(perpendicular(normal.normalize()), 0.0),
+                    kind: SHAPE_DISK,
+                    material,
+                    light,
+                    ..Default::default()
+                },
+            }
+        };
+        for s in &scene.shapes {
+            shapes.push(shape_of(&s.geometry, s.material, NONE));
+        }
+        let geometry_shapes = shapes.len() as u32;
+
+        // Lights.
+        let mut lights = Vec::new();
+        let mut dome = NONE;
+        for (i, l) in scene.lights.iter().enumerate() {
+            let mut g = GpuLight {
+                radiance: v3(l.radiance()),
+                texture: l.texture.unwrap_or(NONE),
+                shape: NONE,
+                flags: if l.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 }
+                    | if l.visible { LIGHT_FLAG_VISIBLE } else { 0 },
+                ..Default::default()
+            };
+            let surface = match &l.kind {
+                LightKind::Rect { center, u, v } => {
+                    g.kind = LIGHT_RECT;
+                    g.p0 = v4(*center - origin, 0.0);
+                    g.p1 = v4(*u, 0.0);
+                    g.p2 = v4(*v, 0.0);
+                    g.area = u.cross(*v).length() as f32;
+                    features |= FEATURE_AREA_LIGHTS;
+                    Some(ShapeGeometry::Rect {
+                        center: *center,
+                        u: *u,
+                        v: *v,
+                    })
+                }
+                LightKind::Disk {
+                    center,
+                    normal,
+                    radius,
+                } => {
+                    let n = normal.normalize();
+                    g.kind = LIGHT_DISK;
+                    g.p0 = v4(*center - origin, *radius);
+                    g.p1 = v4(n, 0.0);
+                    g.p2 = v4(perpendicular(n), 0.0);
+                    g.area = (std::f64::consts::PI * radius * radius) as f32;
+                    features |= FEATURE_AREA_LIGHTS;
+                    Some(ShapeGeometry::Disk {
+                        center: *center,
+                        normal: n,
+                        radius: *radius,
+                    })
+                }
+                LightKind::Sphere { center, radius } => {
+                    g.kind = LIGHT_SPHERE;
+                    g.p0 = v4(*center - origin, *radius);
+                    g.area = (4.0 * std::f64::consts::PI * radius * radius) as f32;
+                    features |= FEATURE_AREA_LIGHTS;
+                    Some(ShapeGeometry::Sphere {
+                        center: *center,
+                        radius: *radius,
+                    })
+                }
+                LightKind::Dome { rotation_deg } => {
+                    let r = rotation_deg.to_radians();
+                    g.kind = LIGHT_DOME;
+                    g.p0 = [r.cos() as f32, r.sin() as f32, 0.0, 0.0];
+                    dome = i as u32;
+                    features |= FEATURE_DOME;
+                    None
+                }
+                LightKind::Sun {
+                    direction,
+                    angular_diameter_deg,
+                } => {
+                    let half = (angular_diameter_deg * 0.5).to_radians();
+                    // 1 - cos(theta) = 2 sin^2(theta / 2): no cancellation for tiny suns.
+                    let om = 2.0 * (half * 0.5).sin().powi(2);
+                    g.kind = LIGHT_SUN;
+                    g.p0 = v4(direction.normalize(), half.cos());
+                    g.p1 = [om as f32, 0.0, 0.0, 0.0];
+                    features |= FEATURE_SUN;
+                    None
+                }
+            };
+            if let (Some(geom), true) = (surface, l.visible) {
+                g.shape = shapes.len() as u32;
+                shapes.push(shape_of(&geom, NONE, i as u32));
+            }
+            lights.push(g);
+        }
+        if !shapes.is_empty() {
+            features |= FEATURE_SHAPES;
+        }
+
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let mut g = GpuMaterial {
+                    diffuse: v3(m.diffuse),
+                    diffuse_texture: m.diffuse_texture.unwrap_or(NONE),
+                    emission: v3(m.emission),
+                    emission_texture: m.emission_texture.unwrap_or(NONE),
+                    tangent_dir: v3(m.tangent_direction.unwrap_or(Vec3::ZERO)),
+                    flags: if m.two_sided {
+                        MATERIAL_FLAG_TWO_SIDED
+                    } else {
+                        0
+                    } | if m.tangent_direction.is_some() {
+                        MATERIAL_FLAG_TANGENT_DIR
+                    } else {
+                        0
+                    },
+                    lobe_count: m.specular.len().min(2) as u32,
+                    metallic_roughness_texture: m.metallic_roughness_texture.unwrap_or(NONE),
+                    ..Default::default()
+                };
+                for (i, l) in m.specular.iter().take(2).enumerate() {
+                    g.lobes[i] = lobe(l);
+                }
+                g
+            })
+            .collect();
+
+        let mut textures = Vec::new();
+        let mut texels: Vec<[f32; 4]> = Vec::new();
+        for t in &scene.textures {
+            textures.push(GpuTexture {
+                offset: texels.len() as u32,
+                width: t.width,
+                height: t.height,
+                flags: 0,
+            });
+            texels.extend(t.texels.iter().map(|v| v.to_array()));
+        }
+        if !textures.is_empty() {
+            features |= FEATURE_TEXTURES;
+        }
+
+        let aabbs: Vec<[f32; 6]> = shapes.iter().map(shape_aabb).collect();
+        // Features a scene does not use get no buffer at all (their address stays 0).
+        fn upload<T: bytemuck::Pod>(
+            ctx: &Context,
+            name: &str,
+            data: &[T],
+            usage: vk::BufferUsageFlags,
+        ) -> Result<Option<Buffer>> {
+            if data.is_empty() {
+                return Ok(None);
+            }
+            ctx.upload(name, data, usage).map(Some)
+        }
+        let vertex_buffer = upload(ctx, "vertices", &vertices, storage | build_input)?;
+        let index_buffer = upload(ctx, "indices", &indices, storage | build_input)?;
+        let aabb_buffer = upload(ctx, "shape AABBs", &aabbs, storage | build_input)?;
+        let instance_buffer = upload(ctx, "instances", &gpu_instances, storage)?;
+        let material_buffer = upload(ctx, "materials", &materials, storage)?;
+        let shape_buffer = upload(ctx, "shapes", &shapes, storage)?;
+        let light_buffer = upload(ctx, "lights", &lights, storage)?;
+        let texture_buffer = upload(ctx, "textures", &textures, storage)?;
+        let texel_buffer = upload(ctx, "texels", &texels, storage)?;
+
+        let cam = &scene.camera;
+        let forward = (cam.look_at - cam.position).normalize();
+        let right_dir = forward.cross(cam.up).normalize();
+        let up_dir = right_dir.cross(forward);
+        let tan_half = (cam.fov_y_deg.to_radians() * 0.5).tan();
+        let aspect = f64::from(cam.width) / f64::from(cam.height);
+        let addr = |b: &Option<Buffer>| b.as_ref().map_or(0, |b| b.address);
+        let frame = Frame {
+            cam_forward: v4(forward, 0.0),
+            cam_right: v4(right_dir * tan_half * aspect, 0.0),
+            cam_up: v4(up_dir * tan_half, 0.0),
+            size: [
+                cam.width,
+                cam.height,
+                lights.len() as u32,
+                shapes.len() as u32,
+            ],
+            counts: [
+                gpu_instances.len() as u32,
+                materials.len() as u32,
+                textures.len() as u32,
+                dome,
+            ],
+            instances: addr(&instance_buffer),
+            vertices: addr(&vertex_buffer),
+            indices: addr(&index_buffer),
+            materials: addr(&material_buffer),
+            shapes: addr(&shape_buffer),
+            lights: addr(&light_buffer),
+            textures: addr(&texture_buffer),
+            texels: addr(&texel_buffer),
+        };
+        Ok(GpuScene {
+            frame,
+            features,
+            meshes,
+            instances,
+            geometry_shapes,
+            shapes,
+            origin,
+            vertex_buffer,
+            index_buffer,
+            aabb_buffer,
+            _buffers: [
+                instance_buffer,
+                material_buffer,
+                shape_buffer,
+                light_buffer,
+                texture_buffer,
+                texel_buffer,
+            ]
+            .into_iter()
+            .flatten()
+            .collect(),
+        })
+    }
+}

@@ -1,0 +1,397 @@
+//! Hardware ray-query acceleration structures: one BLAS per mesh, one of AABBs per group of
+//! analytic shapes, a TLAS over the instances. Scratch addresses honour the device's
+//! minAccelerationStructureScratchOffsetAlignment; BLASes are compacted.
+
+use crate::error::{Error, Result, VkResultExt};
+use crate::vk::{Buffer, Context, MemoryLocation};
+use ash::vk;
+use std::time::Instant;
+
+/// Triangles read straight from the scene's vertex and index buffers.
+pub struct TriangleGeometry {
+    pub vertex_address: u64,
+    pub vertex_stride: u64,
+    pub vertex_count: u32,
+    pub index_address: u64,
+    pub triangle_count: u32,
+}
+
+/// Axis-aligned boxes (vk::AabbPositionsKHR, 24 bytes each) of procedural primitives.
+pub struct AabbGeometry {
+    pub aabb_address: u64,
+    pub count: u32,
+}
+
+pub enum BlasInput {
+    Triangles(TriangleGeometry),
+    Aabbs(AabbGeometry),
+}
+
+pub struct TlasInstance {
+    pub blas: usize,
+    /// Rows of the 3x4 object-to-world matrix.
+    pub transform: [[f32; 4]; 3],
+    /// 24 bits, read by the kernels as the instance custom index.
+    pub custom_index: u32,
+    pub mask: u8,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct BuildStats {
+    pub blas_count: usize,
+    pub triangles: u64,
+    pub blas_bytes_uncompacted: u64,
+    pub blas_bytes: u64,
+    pub tlas_bytes: u64,
+    pub scratch_bytes: u64,
+    pub blas_seconds: f64,
+    pub compaction_seconds: f64,
+    pub tlas_seconds: f64,
+}
+
+pub struct AccelerationStructure {
+    ctx: Context,
+    pub handle: vk::AccelerationStructureKHR,
+    pub address: u64,
+    _buffer: Buffer,
+}
+
+impl Drop for AccelerationStructure {
+    fn drop(&mut self) {
+        if let Some(a) = &self.ctx.accel {
+            // SAFETY: no pending work uses it (every submission is waited for).
+            unsafe { a.destroy_acceleration_structure(self.handle, None) };
+        }
+    }
+}
+
+pub struct RayQueryScene {
+    _blases: Vec<AccelerationStructure>,
+    pub tlas: AccelerationStructure,
+    _instances: Buffer,
+    pub stats: BuildStats,
+}
+
+fn accel(ctx: &Context) -> Result<&ash::khr::acceleration_structure::Device> {
+    ctx.accel.as_ref().ok_or_else(|| Error::Unsupported {
+        device: ctx.info().name.clone(),
+        what: "it has no VK_KHR_acceleration_structure".into(),
+    })
+}
+
+fn create_as(
+    ctx: &Context,
+    ty: vk::AccelerationStructureTypeKHR,
+    size: u64,
+    name: &str,
+) -> Result<AccelerationStructure> {
+    let buffer = ctx.create_buffer(
+        name,
+        size,
+        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR,
+        MemoryLocation::GpuOnly,
+    )?;
+    let a = accel(ctx)?;
+    // SAFETY: the buffer outlives the structure (both are owned by the returned value).
+    unsafe {
+        let handle = a
+            .create_acceleration_structure(
+                &vk::AccelerationStructureCreateInfoKHR::default()
+                    .buffer(buffer.buffer)
+                    .size(size)
+                    .ty(ty),
+                None,
+            )
+            .vk("vkCreateAccelerationStructureKHR")?;
+        let address = a.get_acceleration_structure_device_address(
+            &vk::AccelerationStructureDeviceAddressInfoKHR::default()
+                .acceleration_structure(handle),
+        );
+        Ok(AccelerationStructure {
+            ctx: ctx.clone(),
+            handle,
+            address,
+            _buffer: buffer,
+        })
+    }
+}
+
+/// A scratch buffer whose device address is rounded up to the device's alignment.
+fn scratch(ctx: &Context, size: u64) -> Result<(Buffer, u64)> {
+    let align = ctx.scratch_alignment;
+    let b = ctx.create_buffer(
+        "acceleration structure scratch",
+        size + align,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::GpuOnly,
+    )?;
+    let addr = b.address.div_ceil(align) * align;
+    Ok((b, addr))
+}
+
+fn geometry(input: &BlasInput) -> (vk::AccelerationStructureGeometryKHR<'static>, u32) {
+    match input {
+        BlasInput::Triangles(t) => (
+            vk::AccelerationStructureGeometryKHR::default()
+                .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+                .flags(vk::GeometryFlagsKHR::OPAQUE)
+                .geometry(vk::AccelerationStructureGeometryDataKHR {
+                    triangles: vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+                        .vertex_format(vk::Format::R32G32B32_SFLOAT)
+                        .vertex_data(vk::DeviceOrHostAddressConstKHR {
+                            device_address: t.vertex_address,
+                        })
+                        .vertex_stride(t.vertex_stride)
+                        .max_vertex(t.vertex_count.saturating_sub(1))
+                        .index_type(vk::IndexType::UINT32)
+                        .index_data(vk::DeviceOrHostAddressConstKHR {
+                            device_address: t.index_address,
+                        }),
+                }),
+            t.triangle_count,
+        ),
+        BlasInput::Aabbs(a) => (
+            vk::AccelerationStructureGeometryKHR::default()
+                .geometry_type(vk::GeometryTypeKHR::AABBS)
+                .flags(vk::GeometryFlagsKHR::OPAQUE)
+                .geometry(vk::AccelerationStructureGeometryDataKHR {
+                    aabbs: vk::AccelerationStructureGeometryAabbsDataKHR::default()
+                        .data(vk::DeviceOrHostAddressConstKHR {
+                            device_address: a.aabb_address,
+                        })
+                        .stride(24),
+                }),
+            a.count,
+        ),
+    }
+}
+
+pub fn build(
+    ctx: &Context,
+    inputs: &[BlasInput],
+    instances: &[TlasInstance],
+) -> Result<RayQueryScene> {
+    let a = accel(ctx)?;
+    let mut stats = BuildStats {
+        blas_count: inputs.len(),
+        ..Default::default()
+    };
+    let t0 = Instant::now();
+    // Bottom level: size, create, build all in one submission.
+    let geoms: Vec<_> = inputs.iter().map(geometry).collect();
+    let mut blases = Vec::new();
+    let mut scratches = Vec::new();
+    let mut infos = Vec::new();
+    for (i, (g, count)) in geoms.iter().enumerate() {
+        if let BlasInput::Triangles(t) = &inputs[i] {
+            stats.triangles += u64::from(t.triangle_count);
+        }
+        let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+            .flags(
+                vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
+                    | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION,
+            )
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(std::slice::from_ref(g));
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        // SAFETY: valid build info.
+        unsafe {
+            a.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &info,
+                &[*count],
+                &mut sizes,
+            )
+        };
+        let blas = create_as(
+            ctx,
+            vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+            sizes.acceleration_structure_size,
+            "BLAS",
+        )?;
+        stats.blas_bytes_uncompacted += sizes.acceleration_structure_size;
+        stats.scratch_bytes += sizes.build_scratch_size;
+        let (sb, saddr) = scratch(ctx, sizes.build_scratch_size)?;
+        scratches.push(sb);
+        infos.push(info.dst_acceleration_structure(blas.handle).scratch_data(
+            vk::DeviceOrHostAddressKHR {
+                device_address: saddr,
+            },
+        ));
+        blases.push(blas);
+    }
+    let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> = geoms
+        .iter()
+        .map(|(_, c)| [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(*c)])
+        .collect();
+    let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> =
+        ranges.iter().map(|r| &r[..]).collect();
+    let n = blases.len() as u32;
+    // SAFETY: valid device; the query pool is destroyed below.
+    let pool = unsafe {
+        ctx.device.create_query_pool(
+            &vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
+                .query_count(n.max(1)),
+            None,
+        )
+    }
+    .vk("vkCreateQueryPool")?;
+    let handles: Vec<_> = blases.iter().map(|b| b.handle).collect();
+    let built = ctx.one_shot(|cmd| {
+        // SAFETY: every referenced buffer and structure is alive until the wait in one_shot.
+        unsafe {
+            ctx.device.cmd_reset_query_pool(cmd, pool, 0, n.max(1));
+            if n > 0 {
+                a.cmd_build_acceleration_structures(cmd, &infos, &range_refs);
+                ctx.barrier(cmd);
+                a.cmd_write_acceleration_structures_properties(
+                    cmd,
+                    &handles,
+                    vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR,
+                    pool,
+                    0,
+                );
+            }
+        }
+    });
+    drop(scratches);
+    let mut compact_sizes = vec![0u64; n as usize];
+    let got = built.and_then(|_| {
+        if n == 0 {
+            return Ok(());
+        }
+        // SAFETY: the queries were written by the completed submission.
+        unsafe {
+            ctx.device.get_query_pool_results(
+                pool,
+                0,
+                &mut compact_sizes,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")
+    });
+    // SAFETY: the pool is no longer used.
+    unsafe { ctx.device.destroy_query_pool(pool, None) };
+    got?;
+    stats.blas_seconds = t0.elapsed().as_secs_f64();
+
+    // Compaction: copy each BLAS into a structure of its compacted size.
+    let t1 = Instant::now();
+    let mut compacted = Vec::with_capacity(blases.len());
+    for (b, &size) in blases.iter().zip(&compact_sizes) {
+        let size = if size == 0 { b._buffer.size } else { size };
+        compacted.push(create_as(
+            ctx,
+            vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+            size,
+            "BLAS (compacted)",
+        )?);
+        stats.blas_bytes += size;
+    }
+    if !blases.is_empty() {
+        ctx.one_shot(|cmd| {
+            for (src, dst) in blases.iter().zip(&compacted) {
+                // SAFETY: both structures are alive until the wait in one_shot.
+                unsafe {
+                    a.cmd_copy_acceleration_structure(
+                        cmd,
+                        &vk::CopyAccelerationStructureInfoKHR::default()
+                            .src(src.handle)
+                            .dst(dst.handle)
+                            .mode(vk::CopyAccelerationStructureModeKHR::COMPACT),
+                    )
+                };
+            }
+        })?;
+    }
+    drop(blases);
+    stats.compaction_seconds = t1.elapsed().as_secs_f64();
+
+    // Top level.
+    let t2 = Instant::now();
+    let raw: Vec<vk::AccelerationStructureInstanceKHR> = instances
+        .iter()
+        .map(|i| {
+            let m = &i.transform;
+            vk::AccelerationStructureInstanceKHR {
+                transform: vk::TransformMatrixKHR {
+                    matrix: [
+                        m[0][0], m[0][1], m[0][2], m[0][3], m[1][0], m[1][1], m[1][2], m[1][3],
+                        m[2][0], m[2][1], m[2][2], m[2][3],
+                    ],
+                },
+                instance_custom_index_and_mask: vk::Packed24_8::new(i.custom_index, i.mask),
+                instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
+                    0,
+                    vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
+                ),
+                acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
+                    device_handle: compacted[i.blas].address,
+                },
+            }
+        })
+        .collect();
+    // SAFETY: AccelerationStructureInstanceKHR is plain data of 64 bytes.
+    let bytes: &[u8] = unsafe {
+        std::slice::from_raw_parts(raw.as_ptr() as *const u8, std::mem::size_of_val(&raw[..]))
+    };
+    let instance_buffer = ctx.upload(
+        "TLAS instances",
+        bytes,
+        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
+    )?;
+    let tgeom = [vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR {
+            instances: vk::AccelerationStructureGeometryInstancesDataKHR::default().data(
+                vk::DeviceOrHostAddressConstKHR {
+                    device_address: instance_buffer.address,
+                },
+            ),
+        })];
+    let count = raw.len() as u32;
+    let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+        .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(&tgeom);
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    // SAFETY: valid build info.
+    unsafe {
+        a.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            &info,
+            &[count],
+            &mut sizes,
+        )
+    };
+    let tlas = create_as(
+        ctx,
+        vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+        sizes.acceleration_structure_size,
+        "TLAS",
+    )?;
+    stats.tlas_bytes = sizes.acceleration_structure_size;
+    let (sb, saddr) = scratch(ctx, sizes.build_scratch_size)?;
+    let info =
+        info.dst_acceleration_structure(tlas.handle)
+            .scratch_data(vk::DeviceOrHostAddressKHR {
+                device_address: saddr,
+            });
+    let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
+    ctx.one_shot(|cmd| {
+        // SAFETY: instance buffer, scratch and TLAS are alive until the wait in one_shot.
+        unsafe { a.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
+    })?;
+    drop(sb);
+    stats.tlas_seconds = t2.elapsed().as_secs_f64();
+    Ok(RayQueryScene {
+        _blases: compacted,
+        tlas,
+        _instances: instance_buffer,
+        stats,
+    })
+}

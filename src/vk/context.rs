@@ -1,0 +1,566 @@
+//! Instance, device and queue: created by illum, or borrowed from an application that embeds it.
+
+use super::memory::Allocator;
+use crate::error::{Error, Result, VkResultExt};
+use ash::vk;
+use std::ffi::{CStr, CString, c_void};
+use std::sync::{Arc, Mutex};
+
+/// What a physical device offers, as listed by `illum devices`.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub kind: &'static str,
+    pub driver: String,
+    pub api_version: String,
+    /// Sum of the device-local heaps, in bytes.
+    pub device_local_memory: u64,
+    /// VK_KHR_ray_query and VK_KHR_acceleration_structure with their features.
+    pub ray_query: bool,
+    /// Missing features illum needs (empty when usable).
+    pub missing: Vec<String>,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Device index or a substring of its name; None picks the best (discrete, integrated, virtual, CPU).
+    pub device: Option<String>,
+    /// Enable VK_LAYER_KHRONOS_validation and collect its messages (also on when ILLUM_VALIDATION=1).
+    pub validation: bool,
+}
+
+/// Handles of an application's own Vulkan objects, for embedding illum on its device.
+pub struct ExternalDevice {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    /// A compute-capable queue. illum submits to it and waits on its own fences; the application
+    /// must not submit to the same queue from another thread while illum is recording work.
+    pub queue: vk::Queue,
+    pub queue_family_index: u32,
+    /// Whether the device was created with VK_KHR_acceleration_structure + VK_KHR_ray_query and
+    /// their features enabled (illum then uses hardware ray queries).
+    pub ray_query_enabled: bool,
+}
+
+/// The handles behind a [`Context`], reachable through `Deref` (e.g. `ctx.device`) so that an
+/// embedding application can record its own work against the same objects.
+pub struct Inner {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub info: DeviceInfo,
+    pub accel: Option<ash::khr::acceleration_structure::Device>,
+    pub(crate) allocator: Allocator,
+    pub(crate) command_pool: Mutex<vk::CommandPool>,
+    pub limits: vk::PhysicalDeviceLimits,
+    pub scratch_alignment: u64,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    messages: Arc<Mutex<Vec<String>>>,
+    owned: bool,
+}
+
+/// The Vulkan context every GPU object of illum lives on. Cheap to clone.
+#[derive(Clone)]
+pub struct Context(pub(crate) Arc<Inner>);
+
+impl std::ops::Deref for Context {
+    type Target = Inner;
+    fn deref(&self) -> &Inner {
+        &self.0
+    }
+}
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes valid callback data; `user` is the Arc'd message list that outlives
+    // the messenger (it is destroyed before the list in Inner::drop).
+    unsafe {
+        let msg = if data.is_null() || (*data).p_message.is_null() {
+            "<no message>".to_string()
+        } else {
+            CStr::from_ptr((*data).p_message)
+                .to_string_lossy()
+                .into_owned()
+        };
+        eprintln!("[vulkan validation {severity:?}] {msg}");
+        let list = &*(user as *const Mutex<Vec<String>>);
+        if let Ok(mut l) = list.lock() {
+            l.push(msg);
+        }
+    }
+    vk::FALSE
+}
+
+fn load_entry() -> Result<ash::Entry> {
+    // SAFETY: loading the system Vulkan loader library.
+    unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))
+}
+
+fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance> {
+    // SAFETY: plain Vulkan calls with valid create infos.
+    unsafe {
+        let version = entry
+            .try_enumerate_instance_version()
+            .vk("vkEnumerateInstanceVersion")?
+            .unwrap_or(vk::API_VERSION_1_0);
+        if version < vk::API_VERSION_1_2 {
+            return Err(Error::NoDevice(
+                "the Vulkan loader is older than 1.2".into(),
+            ));
+        }
+        let app = CString::new("illum").unwrap();
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(&app)
+            .engine_name(&app)
+            .api_version(version.min(vk::API_VERSION_1_3));
+        let mut layers = Vec::new();
+        let mut exts = Vec::new();
+        if validation {
+            let available = entry
+                .enumerate_instance_layer_properties()
+                .vk("vkEnumerateInstanceLayerProperties")?;
+            if !available
+                .iter()
+                .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER))
+            {
+                return Err(Error::Loader(
+                    "validation requested but VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)".into(),
+                ));
+            }
+            layers.push(VALIDATION_LAYER.as_ptr());
+            exts.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        let info = vk::InstanceCreateInfo::default()
+            .application_info(&app_info)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&exts);
+        entry.create_instance(&info, None).vk("vkCreateInstance")
+    }
+}
+
+fn kind_name(t: vk::PhysicalDeviceType) -> &'static str {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU",
+        _ => "other",
+    }
+}
+
+fn kind_rank(kind: &str) -> u32 {
+    match kind {
+        "discrete GPU" => 4,
+        "integrated GPU" => 3,
+        "virtual GPU" => 2,
+        "CPU" => 1,
+        _ => 0,
+    }
+}
+
+fn has_ext(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
+    exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name))
+}
+
+/// # Safety
+/// `pd` must be a physical device of `instance`.
+unsafe fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> DeviceInfo {
+    unsafe {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        instance.get_physical_device_properties2(pd, &mut props2);
+        let props = props2.properties;
+        let mem = instance.get_physical_device_memory_properties(pd);
+        let local: u64 = mem.memory_heaps[..mem.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .sum();
+        let exts = instance
+            .enumerate_device_extension_properties(pd)
+            .unwrap_or_default();
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut fas = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+        let mut frq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+        let rq_exts = has_ext(&exts, ash::khr::acceleration_structure::NAME)
+            && has_ext(&exts, ash::khr::ray_query::NAME)
+            && has_ext(&exts, ash::khr::deferred_host_operations::NAME);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f12);
+        if rq_exts {
+            f2 = f2.push_next(&mut fas).push_next(&mut frq);
+        }
+        instance.get_physical_device_features2(pd, &mut f2);
+        let int64 = f2.features.shader_int64 == vk::TRUE;
+        let mut missing = Vec::new();
+        if props.api_version < vk::API_VERSION_1_2 {
+            missing.push("Vulkan 1.2".to_string());
+        }
+        if f12.buffer_device_address != vk::TRUE {
+            missing.push("bufferDeviceAddress".into());
+        }
+        if f12.scalar_block_layout != vk::TRUE {
+            missing.push("scalarBlockLayout".into());
+        }
+        if !int64 {
+            missing.push("shaderInt64".into());
+        }
+        let v = props.api_version;
+        DeviceInfo {
+            index,
+            name: props
+                .device_name_as_c_str()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            kind: kind_name(props.device_type),
+            driver: format!(
+                "{} {}",
+                driver
+                    .driver_name_as_c_str()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                driver
+                    .driver_info_as_c_str()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            )
+            .trim()
+            .to_string(),
+            api_version: format!(
+                "{}.{}.{}",
+                vk::api_version_major(v),
+                vk::api_version_minor(v),
+                vk::api_version_patch(v)
+            ),
+            device_local_memory: local,
+            ray_query: rq_exts
+                && fas.acceleration_structure == vk::TRUE
+                && frq.ray_query == vk::TRUE,
+            missing,
+        }
+    }
+}
+
+/// Every Vulkan device of this machine.
+pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+    let entry = load_entry()?;
+    let instance = create_instance(&entry, false)?;
+    // SAFETY: the instance is valid and destroyed once, below.
+    unsafe {
+        let pds = instance.enumerate_physical_devices();
+        let out = pds.map(|pds| {
+            pds.iter()
+                .enumerate()
+                .map(|(i, &pd)| describe(&instance, pd, i))
+                .collect()
+        });
+        instance.destroy_instance(None);
+        out.vk("vkEnumeratePhysicalDevices")
+    }
+}
+
+fn pick(infos: &[DeviceInfo], want: Option<&str>) -> Result<usize> {
+    let listing = || {
+        infos
+            .iter()
+            .map(|d| format!("{}: {} ({})", d.index, d.name, d.kind))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    if infos.is_empty() {
+        return Err(Error::NoDevice(
+            "the Vulkan loader reports no device (install a driver, e.g. mesa-vulkan-drivers)"
+                .into(),
+        ));
+    }
+    if let Some(w) = want {
+        let found = match w.parse::<usize>() {
+            Ok(i) => infos.iter().find(|d| d.index == i),
+            Err(_) => {
+                let wl = w.to_lowercase();
+                infos.iter().find(|d| d.name.to_lowercase().contains(&wl))
+            }
+        };
+        let d = found.ok_or_else(|| {
+            Error::NoDevice(format!("--device {w:?} matches none of: {}", listing()))
+        })?;
+        if !d.missing.is_empty() {
+            return Err(Error::Unsupported {
+                device: d.name.clone(),
+                what: format!("it lacks {}", d.missing.join(", ")),
+            });
+        }
+        return Ok(d.index);
+    }
+    infos
+        .iter()
+        .filter(|d| d.missing.is_empty())
+        .max_by_key(|d| (kind_rank(d.kind), d.ray_query, std::cmp::Reverse(d.index)))
+        .map(|d| d.index)
+        .ok_or_else(|| {
+            Error::NoDevice(format!(
+                "no device has what illum needs (Vulkan 1.2, bufferDeviceAddress, scalarBlockLayout, shaderInt64): {}",
+                listing()
+            ))
+        })
+}
+
+impl Context {
+    /// Creates an instance and a device of its own.
+    pub fn new(opts: &ContextOptions) -> Result<Context> {
+        let validation = opts.validation
+            || std::env::var("ILLUM_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, validation)?;
+        let messages = Arc::new(Mutex::new(Vec::new()));
+        // SAFETY: valid instance; every object created here is owned by the returned Context or
+        // destroyed on the error paths.
+        unsafe {
+            let debug = if validation {
+                let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
+                let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                    .message_severity(
+                        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                    )
+                    .message_type(
+                        vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                            | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                            | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                    )
+                    .pfn_user_callback(Some(debug_callback))
+                    .user_data(Arc::as_ptr(&messages) as *mut c_void);
+                let m = du
+                    .create_debug_utils_messenger(&info, None)
+                    .vk("vkCreateDebugUtilsMessengerEXT")?;
+                Some((du, m))
+            } else {
+                None
+            };
+            let result = Self::create_device(&instance, opts);
+            let (pd, device, qf, rq, info) = match result {
+                Ok(v) => v,
+                Err(e) => {
+                    if let Some((du, m)) = &debug {
+                        du.destroy_debug_utils_messenger(*m, None);
+                    }
+                    instance.destroy_instance(None);
+                    return Err(e);
+                }
+            };
+            let queue = device.get_device_queue(qf, 0);
+            Self::finish(
+                entry, instance, pd, device, queue, qf, rq, info, debug, messages, true,
+            )
+        }
+    }
+
+    /// Wraps an application's own device. Requirements on it: Vulkan 1.2, bufferDeviceAddress,
+    /// scalarBlockLayout and shaderInt64 enabled; for ray queries also VK_KHR_acceleration_structure,
+    /// VK_KHR_ray_query and their features. illum destroys nothing it did not create.
+    ///
+    /// # Safety
+    /// The handles must be valid, created with the features above, and outlive the Context and
+    /// every object made from it.
+    pub unsafe fn from_external(ext: ExternalDevice) -> Result<Context> {
+        unsafe {
+            let pds = ext
+                .instance
+                .enumerate_physical_devices()
+                .vk("vkEnumeratePhysicalDevices")?;
+            let index = pds
+                .iter()
+                .position(|&p| p == ext.physical_device)
+                .unwrap_or(0);
+            let mut info = describe(&ext.instance, ext.physical_device, index);
+            if !info.missing.is_empty() {
+                return Err(Error::Unsupported {
+                    device: info.name,
+                    what: format!("it lacks {}", info.missing.join(", ")),
+                });
+            }
+            info.ray_query &= ext.ray_query_enabled;
+            let rq = info.ray_query;
+            Self::finish(
+                ext.entry,
+                ext.instance,
+                ext.physical_device,
+                ext.device,
+                ext.queue,
+                ext.queue_family_index,
+                rq,
+                info,
+                None,
+                Arc::new(Mutex::new(Vec::new())),
+                false,
+            )
+        }
+    }
+
+    unsafe fn create_device(
+        instance: &ash::Instance,
+        opts: &ContextOptions,
+    ) -> Result<(vk::PhysicalDevice, ash::Device, u32, bool, DeviceInfo)> {
+        unsafe {
+            let pds = instance
+                .enumerate_physical_devices()
+                .vk("vkEnumeratePhysicalDevices")?;
+            let infos: Vec<DeviceInfo> = pds
+                .iter()
+                .enumerate()
+                .map(|(i, &pd)| describe(instance, pd, i))
+                .collect();
+            let index = pick(&infos, opts.device.as_deref())?;
+            let pd = pds[index];
+            let info = infos[index].clone();
+            let qf = instance
+                .get_physical_device_queue_family_properties(pd)
+                .iter()
+                .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
+                .ok_or_else(|| Error::Unsupported {
+                    device: info.name.clone(),
+                    what: "it has no compute queue".into(),
+                })? as u32;
+            let rq = info.ray_query;
+            let prio = [1.0f32];
+            let qinfo = [vk::DeviceQueueCreateInfo::default()
+                .queue_family_index(qf)
+                .queue_priorities(&prio)];
+            let mut exts = Vec::new();
+            if rq {
+                exts.push(ash::khr::acceleration_structure::NAME.as_ptr());
+                exts.push(ash::khr::ray_query::NAME.as_ptr());
+                exts.push(ash::khr::deferred_host_operations::NAME.as_ptr());
+            }
+            let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+                .buffer_device_address(true)
+                .scalar_block_layout(true);
+            let mut fas = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
+                .acceleration_structure(true);
+            let mut frq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+            let base = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+            let mut f2 = vk::PhysicalDeviceFeatures2::default()
+                .features(base)
+                .push_next(&mut f12);
+            if rq {
+                f2 = f2.push_next(&mut fas).push_next(&mut frq);
+            }
+            let dinfo = vk::DeviceCreateInfo::default()
+                .queue_create_infos(&qinfo)
+                .enabled_extension_names(&exts)
+                .push_next(&mut f2);
+            let device = instance
+                .create_device(pd, &dinfo, None)
+                .vk("vkCreateDevice")?;
+            Ok((pd, device, qf, rq, info))
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    unsafe fn finish(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        pd: vk::PhysicalDevice,
+        device: ash::Device,
+        queue: vk::Queue,
+        qf: u32,
+        rq: bool,
+        info: DeviceInfo,
+        debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+        messages: Arc<Mutex<Vec<String>>>,
+        owned: bool,
+    ) -> Result<Context> {
+        unsafe {
+            let accel =
+                rq.then(|| ash::khr::acceleration_structure::Device::new(&instance, &device));
+            let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+            let mut props2 = vk::PhysicalDeviceProperties2::default();
+            if rq {
+                props2 = props2.push_next(&mut as_props);
+            }
+            instance.get_physical_device_properties2(pd, &mut props2);
+            let limits = props2.properties.limits;
+            let scratch_alignment =
+                u64::from(as_props.min_acceleration_structure_scratch_offset_alignment).max(1);
+            let allocator = Allocator::new(&instance, &device, pd)?;
+            let pool = device
+                .create_command_pool(
+                    &vk::CommandPoolCreateInfo::default()
+                        .queue_family_index(qf)
+                        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                    None,
+                )
+                .vk("vkCreateCommandPool")?;
+            Ok(Context(Arc::new(Inner {
+                entry,
+                instance,
+                physical_device: pd,
+                device,
+                queue,
+                queue_family: qf,
+                info,
+                accel,
+                allocator,
+                command_pool: Mutex::new(pool),
+                limits,
+                scratch_alignment,
+                debug,
+                messages,
+                owned,
+            })))
+        }
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.0.info
+    }
+
+    /// True when this context traces with hardware ray queries.
+    pub fn ray_query(&self) -> bool {
+        self.0.accel.is_some()
+    }
+
+    /// Validation messages received so far (warnings and errors), when validation is on.
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.0
+            .messages
+            .lock()
+            .map(|m| m.clone())
+            .unwrap_or_default()
+    }
+
+    pub fn validation_enabled(&self) -> bool {
+        self.0.debug.is_some()
+    }
+}
+
+impl Drop for Inner {
+    fn drop(&mut self) {
+        // SAFETY: every object made from this context holds an Arc to it, so none is alive here.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            if let Ok(pool) = self.command_pool.lock() {
+                self.device.destroy_command_pool(*pool, None);
+            }
+            self.allocator.shutdown();
+            if self.owned {
+                self.device.destroy_device(None);
+                if let Some((du, m)) = &self.debug {
+                    du.destroy_debug_utils_messenger(*m, None);
+                }
+                self.instance.destroy_instance(None);
+            }
+        }
+    }
+}

@@ -1,0 +1,12 @@
+//! The Vulkan layer: context (instance, device, queue), memory, command submission, compute
+//! pipelines. It knows nothing of rendering.
+
+mod commands;
+mod context;
+mod memory;
+mod pipeline;
+
+pub use context::{Context, ContextOptions, DeviceInfo, ExternalDevice, list_devices};
+pub use gpu_allocator::MemoryLocation;
+pub use memory::Buffer;
+pub use pipeline::ComputePipeline;

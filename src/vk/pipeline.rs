@@ -1,0 +1,188 @@
+//! Compute pipelines: one descriptor set, push constants, and specialization constants (the
+//! per-scene feature switches that fold away code a scene does not need).
+
+use super::context::Context;
+use super::memory::Buffer;
+use crate::error::{Error, Result, VkResultExt};
+use ash::vk;
+
+pub struct ComputePipeline {
+    ctx: Context,
+    pub name: String,
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+}
+
+impl ComputePipeline {
+    /// `spec[i]` is the value of the u32 specialization constant with constant_id i.
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        spirv: &[u8],
+        bindings: &[(u32, vk::DescriptorType)],
+        push_size: u32,
+        spec: &[u32],
+    ) -> Result<ComputePipeline> {
+        let code = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+            .map_err(|e| Error::Invalid(format!("kernel {name}: bad SPIR-V: {e}")))?;
+        let dev = &ctx.device;
+        // SAFETY: valid device; the objects are owned by the returned pipeline (or destroyed on
+        // error by its Drop, since null handles are ignored by vkDestroy*).
+        unsafe {
+            let mut p = ComputePipeline {
+                ctx: ctx.clone(),
+                name: name.to_string(),
+                set_layout: vk::DescriptorSetLayout::null(),
+                layout: vk::PipelineLayout::null(),
+                pipeline: vk::Pipeline::null(),
+                pool: vk::DescriptorPool::null(),
+                set: vk::DescriptorSet::null(),
+            };
+            let lb: Vec<_> = bindings
+                .iter()
+                .map(|&(b, ty)| {
+                    vk::DescriptorSetLayoutBinding::default()
+                        .binding(b)
+                        .descriptor_type(ty)
+                        .descriptor_count(1)
+                        .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                })
+                .collect();
+            p.set_layout = dev
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&lb),
+                    None,
+                )
+                .vk("vkCreateDescriptorSetLayout")?;
+            let layouts = [p.set_layout];
+            let ranges = [vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                .size(push_size)];
+            let mut li = vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts);
+            if push_size > 0 {
+                li = li.push_constant_ranges(&ranges);
+            }
+            p.layout = dev
+                .create_pipeline_layout(&li, None)
+                .vk("vkCreatePipelineLayout")?;
+            let module = dev
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
+                .vk("vkCreateShaderModule")?;
+            let entries: Vec<_> = (0..spec.len())
+                .map(|i| vk::SpecializationMapEntry {
+                    constant_id: i as u32,
+                    offset: (i * 4) as u32,
+                    size: 4,
+                })
+                .collect();
+            let spec_info = vk::SpecializationInfo::default()
+                .map_entries(&entries)
+                .data(bytemuck::cast_slice(spec));
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module)
+                .name(c"main")
+                .specialization_info(&spec_info);
+            let created = dev.create_compute_pipelines(
+                vk::PipelineCache::null(),
+                &[vk::ComputePipelineCreateInfo::default()
+                    .stage(stage)
+                    .layout(p.layout)],
+                None,
+            );
+            dev.destroy_shader_module(module, None);
+            p.pipeline = created.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
+            let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+            for &(_, ty) in bindings {
+                match sizes.iter_mut().find(|s| s.ty == ty) {
+                    Some(s) => s.descriptor_count += 1,
+                    None => sizes.push(vk::DescriptorPoolSize {
+                        ty,
+                        descriptor_count: 1,
+                    }),
+                }
+            }
+            p.pool = dev
+                .create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(1)
+                        .pool_sizes(&sizes),
+                    None,
+                )
+                .vk("vkCreateDescriptorPool")?;
+            p.set = dev
+                .allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(p.pool)
+                        .set_layouts(&layouts),
+                )
+                .vk("vkAllocateDescriptorSets")?[0];
+            Ok(p)
+        }
+    }
+
+    pub fn bind_buffer(&self, binding: u32, ty: vk::DescriptorType, buffer: &Buffer) {
+        let info = [vk::DescriptorBufferInfo::default()
+            .buffer(buffer.buffer)
+            .range(vk::WHOLE_SIZE)];
+        let w = vk::WriteDescriptorSet::default()
+            .dst_set(self.set)
+            .dst_binding(binding)
+            .descriptor_type(ty)
+            .buffer_info(&info);
+        // SAFETY: the set is not in use by pending work (callers bind before recording).
+        unsafe { self.ctx.device.update_descriptor_sets(&[w], &[]) };
+    }
+
+    pub fn bind_acceleration_structure(&self, binding: u32, tlas: vk::AccelerationStructureKHR) {
+        let handles = [tlas];
+        let mut asw = vk::WriteDescriptorSetAccelerationStructureKHR::default()
+            .acceleration_structures(&handles);
+        // push_next leaves descriptor_count 0: set it (PLATFORM.md, ash 0.38 pitfalls).
+        let mut w = vk::WriteDescriptorSet::default()
+            .dst_set(self.set)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+            .push_next(&mut asw);
+        w.descriptor_count = 1;
+        // SAFETY: as in bind_buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[w], &[]) };
+    }
+
+    /// Records push constants, the bound set and a dispatch of `groups` workgroups.
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, push: &[u8], groups: [u32; 3]) {
+        let dev = &self.ctx.device;
+        // SAFETY: cmd is recording; the pipeline, layout and set are alive.
+        unsafe {
+            dev.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            dev.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            if !push.is_empty() {
+                dev.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            dev.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+        }
+    }
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        let dev = &self.ctx.device;
+        // SAFETY: no pending work uses these (submissions are waited for).
+        unsafe {
+            dev.destroy_pipeline(self.pipeline, None);
+            dev.destroy_descriptor_pool(self.pool, None);
+            dev.destroy_pipeline_layout(self.layout, None);
+            dev.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
