@@ -5,14 +5,13 @@
 mod primary;
 mod upload;
 
-pub use primary::TraceStructure;
 pub use upload::GpuScene;
 
 use crate::error::{Error, Result};
 use crate::layout::*;
 use crate::output::Film;
 use crate::scene::Scene;
-use crate::trace::TraceMode;
+use crate::trace::{TraceMode, TraceStructure};
 use crate::trace::rayquery::BuildStats;
 use crate::vk::{Context, MemoryLocation};
 use ash::vk;
@@ -84,25 +83,11 @@ impl Renderer {
                 "samples per pixel must be at least 1".into(),
             ));
         }
-        let ray_query = match settings.trace {
-            TraceMode::Auto | TraceMode::RayQuery => ctx.ray_query(),
-            TraceMode::Bvh => false,
-        };
-        if !ray_query {
-            return Err(Error::Unsupported {
-                device: ctx.info().name.clone(),
-                what: if settings.trace == TraceMode::RayQuery {
-                    "--trace rayquery was asked for, but the device has no VK_KHR_ray_query".into()
-                } else {
-                    "the compute-BVH trace path is not built yet, and the device has no VK_KHR_ray_query (install Mesa 25 from bookworm-backports: scripts/setup-debian.sh)".into()
-                },
-            });
-        }
-        let gpu = GpuScene::new(ctx, scene, ray_query)?;
+        let mode = settings.trace.resolve(ctx)?;
+        let gpu = GpuScene::new(ctx, scene, mode == TraceMode::RayQuery)?;
         let upload_seconds = t0.elapsed().as_secs_f64();
-        let trace = TraceStructure::build_ray_query(ctx, &gpu)?;
-        let TraceStructure::RayQuery(rq) = &trace;
-        let build = rq.stats.clone();
+        let trace = TraceStructure::build(ctx, &gpu, mode)?;
+        let build = trace.build_stats().clone();
 
         let (w, h) = (scene.camera.width, scene.camera.height);
         let pixels = u64::from(w) * u64::from(h);
@@ -164,7 +149,7 @@ impl Renderer {
                 render_seconds,
                 total_seconds: t0.elapsed().as_secs_f64(),
                 non_finite_samples: non_finite,
-                trace: "rayquery",
+                trace: trace.name(),
             },
         })
     }

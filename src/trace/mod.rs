@@ -3,6 +3,13 @@
 
 pub mod rayquery;
 
+use crate::error::Result;
+use crate::layout::*;
+use crate::render::GpuScene;
+use crate::vk::{ComputePipeline, Context};
+use ash::vk;
+use rayquery::{AabbGeometry, BlasInput, RayQueryScene, TlasInstance, TriangleGeometry};
+
 /// Which implementation of the trace interface a render uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum TraceMode {
@@ -23,6 +30,137 @@ impl std::str::FromStr for TraceMode {
             _ => Err(format!(
                 "unknown trace mode {s:?} (expected auto, rayquery or bvh)"
             )),
+        }
+    }
+}
+
+/// The trace structure a kernel binds.
+pub enum TraceStructure {
+    RayQuery(RayQueryScene),
+}
+
+impl TraceStructure {
+    /// Builds the structure `mode` asks for over an uploaded scene.
+    pub fn build(ctx: &Context, scene: &GpuScene, mode: TraceMode) -> Result<TraceStructure> {
+        match mode.resolve(ctx)? {
+            TraceMode::RayQuery => Self::build_ray_query(ctx, scene),
+            _ => Err(crate::error::Error::Unsupported {
+                device: ctx.info().name.clone(),
+                what: "the compute-BVH trace path is not built yet".into(),
+            }),
+        }
+    }
+
+    /// Short name for reports: "rayquery" or "bvh".
+    pub fn name(&self) -> &'static str {
+        match self {
+            TraceStructure::RayQuery(_) => "rayquery",
+        }
+    }
+
+    /// The SPIR-V variant of a kernel for this structure.
+    pub fn select<'a>(&self, rq: &'a [u8], _bvh: &'a [u8]) -> &'a [u8] {
+        match self {
+            TraceStructure::RayQuery(_) => rq,
+        }
+    }
+
+    /// Descriptor bindings the trace interface needs (beside the kernel's own).
+    pub fn bindings(&self) -> Vec<(u32, vk::DescriptorType)> {
+        match self {
+            TraceStructure::RayQuery(_) => {
+                vec![(BINDING_TLAS, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)]
+            }
+        }
+    }
+
+    pub fn bind(&self, pipeline: &ComputePipeline) {
+        match self {
+            TraceStructure::RayQuery(rq) => {
+                pipeline.bind_acceleration_structure(BINDING_TLAS, rq.tlas.handle)
+            }
+        }
+    }
+
+    pub fn build_stats(&self) -> &rayquery::BuildStats {
+        match self {
+            TraceStructure::RayQuery(rq) => &rq.stats,
+        }
+    }
+
+    /// Builds the ray-query acceleration structures over an uploaded scene.
+    pub fn build_ray_query(ctx: &Context, scene: &GpuScene) -> Result<TraceStructure> {
+        let mut inputs = Vec::new();
+        let mut instances = Vec::new();
+        let identity = [
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        if let (Some(vb), Some(ib)) = (&scene.vertex_buffer, &scene.index_buffer) {
+            for m in &scene.meshes {
+                inputs.push(BlasInput::Triangles(TriangleGeometry {
+                    vertex_address: vb.address
+                        + u64::from(m.first_vertex) * std::mem::size_of::<GpuVertex>() as u64,
+                    vertex_stride: std::mem::size_of::<GpuVertex>() as u64,
+                    vertex_count: m.vertex_count,
+                    index_address: ib.address + u64::from(m.first_index) * 4,
+                    triangle_count: m.triangle_count,
+                }));
+            }
+            for (i, (mesh, rows)) in scene.instances.iter().enumerate() {
+                instances.push(TlasInstance {
+                    blas: *mesh as usize,
+                    transform: *rows,
+                    custom_index: i as u32,
+                    mask: MASK_GEOMETRY as u8,
+                });
+            }
+        }
+        if let Some(ab) = &scene.aabb_buffer {
+            let n = scene.shapes.len() as u32;
+            let groups = [
+                (0, scene.geometry_shapes, MASK_GEOMETRY),
+                (
+                    scene.geometry_shapes,
+                    n - scene.geometry_shapes,
+                    MASK_LIGHTS,
+                ),
+            ];
+            for (first, count, mask) in groups {
+                if count == 0 {
+                    continue;
+                }
+                instances.push(TlasInstance {
+                    blas: inputs.len(),
+                    transform: identity,
+                    custom_index: first,
+                    mask: mask as u8,
+                });
+                inputs.push(BlasInput::Aabbs(AabbGeometry {
+                    aabb_address: ab.address + u64::from(first) * 24,
+                    count,
+                }));
+            }
+        }
+        Ok(TraceStructure::RayQuery(rayquery::build(
+            ctx, &inputs, &instances,
+        )?))
+    }
+}
+
+
+impl TraceMode {
+    /// The concrete path for this device: `Auto` takes ray queries when the device has them.
+    pub fn resolve(self, ctx: &Context) -> Result<TraceMode> {
+        match self {
+            TraceMode::Auto if ctx.ray_query() => Ok(TraceMode::RayQuery),
+            TraceMode::Auto => Ok(TraceMode::Bvh),
+            TraceMode::RayQuery if !ctx.ray_query() => Err(crate::error::Error::Unsupported {
+                device: ctx.info().name.clone(),
+                what: "--trace rayquery was asked for, but the device has no VK_KHR_ray_query".into(),
+            }),
+            m => Ok(m),
         }
     }
 }

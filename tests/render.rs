@@ -1,0 +1,215 @@
+//! Rendering with analytic expectations: depth, normals, directly seen emitters, AOV layers.
+
+mod common;
+use common::*;
+use glam::DVec3;
+
+/// Camera ray direction through film position (fx, fy) in pixels, as the kernel builds it.
+fn camera_dir(pos: DVec3, look: DVec3, fov_deg: f64, w: u32, h: u32, fx: f64, fy: f64) -> DVec3 {
+    let f = (look - pos).normalize();
+    let r = f.cross(DVec3::Y).normalize();
+    let u = r.cross(f);
+    let t = (fov_deg.to_radians() / 2.0).tan();
+    let a = f64::from(w) / f64::from(h);
+    let nx = 2.0 * fx / f64::from(w) - 1.0;
+    let ny = 2.0 * fy / f64::from(h) - 1.0;
+    (f + nx * r * t * a - ny * u * t).normalize()
+}
+
+#[test]
+fn camera_inside_a_sphere_sees_its_radius_everywhere() {
+    let out = render(
+        r#"{"camera": {"position": [10, -4, 3], "look_at": [11, -4, 3], "fov_y": 90, "resolution": [24, 16]},
+            "materials": {"m": {"diffuse": [1, 1, 1]}},
+            "shapes": {"s": {"sphere": {"center": [10, -4, 3], "radius": 2.5}, "material": "m"}}}"#,
+        4,
+    );
+    for (i, &z) in out.film.depth.iter().enumerate() {
+        assert!((z - 2.5).abs() < 2.5e-5, "pixel {i}: Z = {z}, expected 2.5");
+        let n = out.film.normal[i];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        // Outward normals of the sphere, averaged over the pixel's samples.
+        assert!(len > 0.99 && len < 1.0 + 1e-5, "pixel {i}: |N| = {len}");
+        assert_eq!(out.film.albedo[i], [1.0, 1.0, 1.0], "pixel {i}");
+    }
+    assert_eq!(out.stats.non_finite_samples, 0);
+}
+
+#[test]
+fn depth_of_a_quad_at_a_known_distance() {
+    let (w, h, fov, spp) = (32u32, 24u32, 40.0, 64u32);
+    let out = render(
+        r#"{"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov_y": 40, "resolution": [32, 24]},
+            "materials": {"m": {"diffuse": [0.5, 0.5, 0.5]}},
+            "shapes": {"q": {"rect": {"center": [0, 0, -3], "normal": [0, 0, 1], "size": [100, 100]}, "material": "m"}}}"#,
+        spp,
+    );
+    let (pos, look) = (DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0));
+    for y in 0..h {
+        for x in 0..w {
+            // Z is the mean of t = 3 / cos over the pixel; integrate it on an 8x8 grid and allow
+            // 5 standard errors of the 64-sample mean (t varies by at most its range in a pixel).
+            let mut ts = Vec::new();
+            for j in 0..8 {
+                for i in 0..8 {
+                    let d = camera_dir(pos, look, fov, w, h, f64::from(x) + (f64::from(i) + 0.5) / 8.0, f64::from(y) + (f64::from(j) + 0.5) / 8.0);
+                    ts.push(3.0 / -d.z);
+                }
+            }
+            let mean = ts.iter().sum::<f64>() / ts.len() as f64;
+            let range = ts.iter().cloned().fold(f64::MIN, f64::max) - ts.iter().cloned().fold(f64::MAX, f64::min);
+            let tol = 5.0 * range / f64::from(spp).sqrt() + 1e-5 * mean;
+            let z = f64::from(out.film.depth[(y * w + x) as usize]);
+            assert!((z - mean).abs() <= tol, "pixel ({x},{y}): Z = {z}, expected {mean} ± {tol}");
+            let n = out.film.normal[(y * w + x) as usize];
+            assert!((n[2] - 1.0).abs() < 1e-6 && n[0].abs() < 1e-6 && n[1].abs() < 1e-6, "N = {n:?}");
+        }
+    }
+}
+
+#[test]
+fn normals_of_a_sphere_point_away_from_its_centre() {
+    let (w, h, fov) = (32u32, 32u32, 30.0);
+    let pos = DVec3::new(0.0, 0.0, 5.0);
+    let c = DVec3::new(0.2, -0.1, 0.0);
+    let out = render(
+        r#"{"camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 30, "resolution": [32, 32]},
+            "materials": {"m": {"diffuse": [1, 1, 1]}},
+            "shapes": {"s": {"sphere": {"center": [0.2, -0.1, 0], "radius": 1}, "material": "m"}}}"#,
+        16,
+    );
+    let mut checked = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            // Only pixels whose every sample hit the sphere (albedo 1 = all samples hit).
+            if out.film.albedo[i] != [1.0, 1.0, 1.0] {
+                continue;
+            }
+            let d = camera_dir(pos, DVec3::ZERO, fov, w, h, f64::from(x) + 0.5, f64::from(y) + 0.5);
+            let f = pos - c;
+            let b = -f.dot(d);
+            let disc = 1.0 - (f + b * d).length_squared();
+            if disc < 0.05 {
+                continue; // near the silhouette the normal varies a lot within a pixel
+            }
+            let t = b - disc.sqrt();
+            let expected = (pos + t * d - c).normalize();
+            let n = DVec3::new(out.film.normal[i][0].into(), out.film.normal[i][1].into(), out.film.normal[i][2].into());
+            assert!(n.normalize().dot(expected) > 0.998, "pixel ({x},{y}): N = {n}, expected {expected}");
+            let z = f64::from(out.film.depth[i]);
+            assert!((z - t).abs() < 0.05 * t, "pixel ({x},{y}): Z = {z}, expected about {t}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 300, "only {checked} pixels checked");
+}
+
+#[test]
+fn directly_seen_emitters_give_exactly_their_radiance() {
+    // A rect light filling the view, seen from its front: every sample returns its radiance
+    // color * intensity * 2^exposure = (0.5, 1, 2) * 3 * 2 exactly, in beauty and Emission.
+    let out = render(
+        r#"{"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov_y": 30, "resolution": [16, 16]},
+            "lights": {"l": {"rect": {"center": [0, 0, -2], "normal": [0, 0, 1], "size": [50, 50]},
+                             "color": [0.5, 1, 2], "intensity": 3, "exposure": 1}}}"#,
+        4,
+    );
+    for i in 0..out.film.beauty.len() {
+        assert_eq!(out.film.beauty[i], [3.0, 6.0, 12.0], "pixel {i}");
+        assert_eq!(out.film.emission[i], [3.0, 6.0, 12.0], "pixel {i}");
+    }
+    // The same from behind: one-sided, so black; and an emissive material does the same.
+    let back = render(
+        r#"{"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov_y": 30, "resolution": [8, 8]},
+            "lights": {"l": {"rect": {"center": [0, 0, -2], "normal": [0, 0, -1], "size": [50, 50]}, "intensity": 3}}}"#,
+        2,
+    );
+    assert!(back.film.beauty.iter().all(|p| *p == [0.0, 0.0, 0.0]));
+    let glow = render(
+        r#"{"camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov_y": 30, "resolution": [8, 8]},
+            "materials": {"g": {"diffuse": [0, 0, 0], "emission": [0.25, 4, 7]}},
+            "shapes": {"q": {"rect": {"center": [0, 0, -2], "normal": [0, 0, 1], "size": [50, 50]}, "material": "g"}}}"#,
+        2,
+    );
+    assert!(glow.film.beauty.iter().all(|p| *p == [0.25, 4.0, 7.0]));
+}
+
+#[test]
+fn a_constant_dome_is_seen_exactly_and_lights_lambert_as_albedo_times_radiance() {
+    let sky = render(
+        r#"{"camera": {"position": [0, 0, 0], "look_at": [0, 1, -1], "fov_y": 60, "resolution": [8, 8]},
+            "lights": {"sky": {"dome": {}, "color": [0.2, 0.4, 0.8], "intensity": 2}}}"#,
+        2,
+    );
+    for p in &sky.film.beauty {
+        for (c, e) in p.iter().zip([0.4f32, 0.8, 1.6]) {
+            assert!((c - e).abs() <= 1e-6 * e, "{p:?}");
+        }
+    }
+    // An unoccluded Lambert plane under a uniform dome reflects albedo * L; with cosine sampling
+    // every sample is exactly that (zero variance), up to float rounding.
+    let plane = render(
+        r#"{"camera": {"position": [0, 1, 0], "look_at": [0, 0, -1], "fov_y": 40, "resolution": [8, 8]},
+            "materials": {"m": {"diffuse": [0.5, 0.25, 1]}},
+            "shapes": {"floor": {"disk": {"center": [0, 0, -1], "normal": [0, 1, 0], "radius": 1000}, "material": "m"}},
+            "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 2}}}"#,
+        8,
+    );
+    for p in &plane.film.beauty {
+        for (c, e) in p.iter().zip([1.0f32, 0.5, 2.0]) {
+            assert!((c - e).abs() <= 1e-4 * e, "{p:?}");
+        }
+    }
+}
+
+#[test]
+fn same_seed_same_image_other_seed_other_noise() {
+    let json = r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0.5, 0], "fov_y": 40, "resolution": [16, 12]},
+        "materials": {"m": {"diffuse": [0.7, 0.7, 0.7]}},
+        "shapes": {"s": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "m"},
+                   "f": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "m"}},
+        "lights": {"l": {"sphere": {"center": [1, 2, 1], "radius": 0.3}, "intensity": 10}}}"#;
+    let ctx = context();
+    let s = scene(json);
+    let a = render_with(&ctx, &s, 4, 7);
+    let b = render_with(&ctx, &s, 4, 7);
+    let c = render_with(&ctx, &s, 4, 8);
+    assert_eq!(a.film.beauty, b.film.beauty);
+    assert_ne!(a.film.beauty, c.film.beauty);
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn exr_has_the_aov_layers_and_metadata() {
+    let out = render(
+        r#"{"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_y": 40, "resolution": [8, 6]},
+            "materials": {"m": {}},
+            "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1}, "material": "m"}},
+            "lights": {"sky": {"dome": {}}}}"#,
+        2,
+    );
+    let path = temp_path("aovs.exr");
+    let meta = illum::output::ImageMetadata {
+        spp: 2,
+        render_seconds: out.stats.total_seconds,
+        device: "test".into(),
+        seed: 0,
+        extra: vec![],
+    };
+    illum::output::write_exr(&path, &out.film, &meta).unwrap();
+    let img = illum::output::read_exr(&path).unwrap();
+    let mut names: Vec<&str> = img.channels.iter().map(|(n, _)| n.as_str()).collect();
+    names.sort();
+    for want in [
+        "R", "G", "B", "Albedo.R", "Albedo.G", "Albedo.B", "N.X", "N.Y", "N.Z", "Z",
+        "Emission.R", "Emission.G", "Emission.B", "Variance.R", "Variance.G", "Variance.B",
+    ] {
+        assert!(names.contains(&want), "missing channel {want} in {names:?}");
+    }
+    assert_eq!(img.attribute("illum.spp"), Some("2"));
+    assert!(img.attribute("illum.renderSeconds").is_some());
+    assert!(img.attribute("illum.device").is_some());
+    assert!(img.attribute("illum.seed").is_some());
+    std::fs::remove_file(&path).ok();
+}
