@@ -1,4 +1,4 @@
-// illum-variants: rq
+// illum-variants: rq bvh
 // Primary rays with a box pixel filter, writing the AOVs (albedo, normal, depth, emission) and a
 // preview beauty: emission plus Lambert direct lighting, one light sample per light with a shadow
 // ray (dome: cosine-sampled). The direct-lighting integrator replaces the preview beauty.
@@ -137,6 +137,7 @@ void main() {
         }
         acc.beauty.rgb += beauty;
         acc.beauty_sq.rgb += beauty * beauty;
+        if (((pc.first_sample + k) & 1u) == 1u) acc.beauty_odd.rgb += beauty;
     }
     film[pixel] = acc;
 }

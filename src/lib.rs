@@ -18,3 +18,5 @@ pub mod vk;
 pub use error::{Error, Result};
 pub mod render;
 pub mod trace;
+pub mod metrics;
+pub mod report;

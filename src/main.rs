@@ -28,6 +28,9 @@ enum Command {
     Devices,
     /// Print the JSON Schema of the scene format.
     Schema,
+    /// Benchmarks: figures to read, not tests.
+    #[command(subcommand)]
+    Bench(BenchCommand),
 }
 
 #[derive(clap::Args)]
@@ -37,9 +40,21 @@ struct RenderArgs {
     /// Output image: .exr (multi-layer), or .png (writes the .exr beside it too).
     #[arg(short, long, default_value = "illum.exr")]
     output: PathBuf,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 16)]
-    spp: u32,
+    /// Samples per pixel (the cap when --time is given).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Render for this many seconds (progressive passes) instead of a fixed sample count.
+    #[arg(long)]
+    time: Option<f64>,
+    /// Reference image (EXR, same resolution) to measure every pass against.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Write the error-against-time report, one row per pass (CSV).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Plot the error against time (log-log PNG).
+    #[arg(long)]
+    report_plot: Option<PathBuf>,
     /// Seed of the per-sample random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -76,6 +91,7 @@ fn run() -> Result<()> {
     match Cli::parse().command {
         Command::Render(a) => render(a),
         Command::Devices => devices(),
+        Command::Bench(BenchCommand::Trace(a)) => bench_trace(a),
         Command::Schema => {
             println!(
                 "{}",
@@ -153,16 +169,41 @@ fn render(a: RenderArgs) -> Result<()> {
         validation: a.validate,
     })?;
     let renderer = Renderer::new(ctx.clone());
+    let reference = match &a.reference {
+        Some(p) => {
+            let img = illum::output::read_exr(p)?;
+            if (img.width, img.height) != (scene.camera.width, scene.camera.height) {
+                bail!(
+                    "--reference {}: it is {}x{}, the render {}x{}",
+                    p.display(),
+                    img.width,
+                    img.height,
+                    scene.camera.width,
+                    scene.camera.height
+                );
+            }
+            Some(img.rgb()?)
+        }
+        None => None,
+    };
+    let spp = match (a.spp, a.time) {
+        (Some(n), _) => n,
+        (None, Some(_)) => 1 << 20,
+        (None, None) => 16,
+    };
     let settings = RenderSettings {
-        spp: a.spp,
+        spp,
+        time: a.time,
         seed: a.seed,
         trace: a.trace,
+        reference,
+        evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
         ..Default::default()
     };
     let bar = if a.quiet {
         ProgressBar::hidden()
     } else {
-        let b = ProgressBar::new(u64::from(a.spp));
+        let b = ProgressBar::new(u64::from(spp));
         b.set_style(
             ProgressStyle::with_template(
                 "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} spp (eta {eta})",
@@ -171,22 +212,79 @@ fn render(a: RenderArgs) -> Result<()> {
         );
         b
     };
+    let started = std::time::Instant::now();
     let out = renderer.render(&scene, &settings, &mut |done, _| {
-        bar.set_position(u64::from(done))
+        if let Some(t) = a.time {
+            // Under a time budget the bar shows time, in per-mille of the budget.
+            bar.set_length(1000);
+            bar.set_position(((started.elapsed().as_secs_f64() / t) * 1000.0).min(1000.0) as u64);
+        } else {
+            bar.set_position(u64::from(done))
+        }
     })?;
     bar.finish_and_clear();
+    let last = out.passes.last().cloned().unwrap_or_default();
+    let mut extra = vec![
+        ("illum.trace".to_string(), out.stats.trace.to_string()),
+        (
+            "illum.nonFiniteSamples".into(),
+            out.stats.non_finite_samples.to_string(),
+        ),
+        (
+            "illum.deviceSeconds".into(),
+            format!("{:.6}", out.stats.device_seconds),
+        ),
+    ];
+    if let Some(e) = last.estimated_relmse {
+        extra.push(("illum.estimatedRelMSE".into(), format!("{e:.6e}")));
+    }
+    if let Some(e) = last.error {
+        extra.push(("illum.relMSE".into(), format!("{:.6e}", e.relmse)));
+        extra.push(("illum.RMSE".into(), format!("{:.6e}", e.rmse)));
+        extra.push(("illum.MAE".into(), format!("{:.6e}", e.mae)));
+    }
+    if let Some(p) = &a.report {
+        illum::report::write_csv(p, &out.passes)?;
+    }
+    if let Some(p) = &a.report_plot {
+        let (label, pts): (&str, Vec<(f64, f64)>) = if settings.reference.is_some() {
+            (
+                "relMSE",
+                out.passes
+                    .iter()
+                    .filter_map(|p| Some((p.wall_seconds, p.error?.relmse)))
+                    .collect(),
+            )
+        } else {
+            (
+                "estimated relMSE (half-buffers; blind to bias)",
+                out.passes
+                    .iter()
+                    .filter_map(|p| Some((p.wall_seconds, p.estimated_relmse?)))
+                    .collect(),
+            )
+        };
+        let name = a
+            .scene
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "default scene".into());
+        illum::report::plot_error(
+            p,
+            &format!("{name}: error against time"),
+            label,
+            &[illum::report::Series {
+                name: out.stats.trace.to_string(),
+                points: pts,
+            }],
+        )?;
+    }
     let meta = ImageMetadata {
-        spp: a.spp,
+        spp: out.stats.spp,
         render_seconds: out.stats.total_seconds,
         device: ctx.info().name.clone(),
         seed: a.seed,
-        extra: vec![
-            ("illum.trace".into(), out.stats.trace.into()),
-            (
-                "illum.nonFiniteSamples".into(),
-                out.stats.non_finite_samples.to_string(),
-            ),
-        ],
+        extra,
     };
     write(&exr_path, |p| write_exr(p, &out.film, &meta))?;
     if let Some(p) = &png_path {
@@ -194,22 +292,48 @@ fn render(a: RenderArgs) -> Result<()> {
     }
     if !a.quiet {
         let s = &out.stats;
+        let b = &s.build;
+        let samples = f64::from(scene.camera.width)
+            * f64::from(scene.camera.height)
+            * f64::from(out.stats.spp);
         eprintln!(
-            "illum: {}x{} at {} spp in {:.2} s (render {:.2} s, BLAS+TLAS {:.3} s) on {} via {}; {} non-finite samples; wrote {}{}",
+            "illum: {}x{} at {} spp in {:.2} s on {} via {}: upload {:.3} s, structure build {:.3} s \
+             ({} triangles; BLAS {:.1} MiB after compaction from {:.1}, TLAS {:.2} MiB), render {:.2} s \
+             ({:.2} M camera samples/s); {} non-finite samples; wrote {}{}",
             scene.camera.width,
             scene.camera.height,
-            a.spp,
+            out.stats.spp,
             s.total_seconds,
-            s.render_seconds,
-            s.build.blas_seconds + s.build.compaction_seconds + s.build.tlas_seconds,
             ctx.info().name,
             s.trace,
+            s.upload_seconds,
+            b.blas_seconds + b.compaction_seconds + b.tlas_seconds,
+            b.triangles,
+            b.blas_bytes as f64 / 1048576.0,
+            b.blas_bytes_uncompacted as f64 / 1048576.0,
+            b.tlas_bytes as f64 / 1048576.0,
+            s.render_seconds,
+            samples / s.render_seconds / 1e6,
             s.non_finite_samples,
             exr_path.display(),
             png_path
                 .map(|p| format!(" and {}", p.display()))
                 .unwrap_or_default()
         );
+        let mut line = format!(
+            "illum: {} spp, {:.3} s rendering ({:.3} s on the device)",
+            last.spp, last.wall_seconds, last.device_seconds
+        );
+        if let Some(e) = last.error {
+            line += &format!(
+                ": relMSE {:.4e}, RMSE {:.4e}, MAE {:.4e} against the reference",
+                e.relmse, e.rmse, e.mae
+            );
+        }
+        if let Some(e) = last.estimated_relmse {
+            line += &format!("; estimated relMSE {e:.4e} (half-buffers, blind to bias)");
+        }
+        eprintln!("{line}");
     }
     let msgs = ctx.validation_messages();
     if !msgs.is_empty() {
@@ -223,4 +347,96 @@ fn write<E: std::error::Error + Send + Sync + 'static>(
     f: impl FnOnce(&Path) -> std::result::Result<(), E>,
 ) -> Result<()> {
     f(path).with_context(|| format!("writing {}", path.display()))
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Ray throughput, build time and memory of the trace paths (ray queries, compute BVH) on
+    /// procedurally generated meshes.
+    Trace(BenchTraceArgs),
+}
+
+#[derive(clap::Args)]
+struct BenchTraceArgs {
+    /// Triangle counts of the procedural meshes, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "100000,1000000")]
+    triangles: Vec<usize>,
+    /// Rays per measurement.
+    #[arg(long, default_value_t = 1 << 18)]
+    rays: usize,
+    /// Paths to measure: both, rayquery or bvh.
+    #[arg(long, default_value = "both")]
+    trace: String,
+    /// Device index or a substring of its name (see `illum devices`).
+    #[arg(long)]
+    device: Option<String>,
+    /// Enable the Vulkan validation layers.
+    #[arg(long)]
+    validate: bool,
+}
+
+fn bench_trace(a: BenchTraceArgs) -> Result<()> {
+    use illum::trace::bench;
+    let paths = match a.trace.as_str() {
+        "both" => vec![TraceMode::RayQuery, TraceMode::Bvh],
+        other => vec![other.parse::<TraceMode>().map_err(anyhow::Error::msg)?],
+    };
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: a.validate,
+    })?;
+    if paths.contains(&TraceMode::RayQuery) && !ctx.ray_query() {
+        eprintln!(
+            "illum: {} has no VK_KHR_ray_query: measuring the compute BVH only",
+            ctx.info().name
+        );
+    }
+    println!(
+        "device: {} ({}), {} rays per measurement",
+        ctx.info().name,
+        ctx.info().driver,
+        a.rays
+    );
+    println!(
+        "{:>9} {:>9} | {:>8} {:>9} {:>9} | {:>9} {:>11} {:>12} | {:>7} {:>7}",
+        "triangles",
+        "path",
+        "build ms",
+        "BLAS MiB",
+        "TLAS KiB",
+        "primary",
+        "bounce any",
+        "bounce close",
+        "hit %",
+        "bnc %"
+    );
+    bench::run(
+        &ctx,
+        &bench::BenchOptions {
+            triangles: a.triangles.clone(),
+            rays: a.rays,
+            paths,
+        },
+        &mut |r| {
+            println!(
+                "{:>9} {:>9} | {:>8.1} {:>9.2} {:>9.2} | {:>9.3} {:>11.3} {:>12.3} | {:>7.1} {:>7.1}",
+                r.triangles,
+                r.path,
+                r.build.seconds() * 1e3,
+                r.build.blas_bytes as f64 / 1048576.0,
+                r.build.tlas_bytes as f64 / 1024.0,
+                r.primary,
+                r.bounce_any,
+                r.bounce_closest,
+                r.primary_hits * 100.0,
+                r.bounce_hits * 100.0
+            )
+        },
+    )?;
+    println!("(ray figures in Mrays/s; bounce rays: cosine-distributed from the first hits)");
+    let msgs = ctx.validation_messages();
+    if !msgs.is_empty() {
+        bail!("{} Vulkan validation message(s) (see above)", msgs.len());
+    }
+    Ok(())
 }

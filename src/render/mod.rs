@@ -1,42 +1,75 @@
-//! The renderer: uploads a scene, builds its trace structure, runs the kernels in bounded
-//! dispatches and resolves the film. It knows nothing of the command line; `main.rs` and
-//! embedding applications call [`Renderer::render`].
+//! The renderer: uploads a scene, builds its trace structure, runs the kernels in progressive
+//! passes of bounded dispatches, and resolves the film. It knows nothing of the command line;
+//! `main.rs` and embedding applications call [`Renderer::render`].
+//!
+//! Every render can report its error against run time: after each pass the film is read back and
+//! compared with a reference (RMSE, relMSE, MAE) or, without one, its relMSE is estimated from the
+//! even and odd half-buffers (see [`crate::metrics`]).
 
+mod film;
 mod primary;
 mod upload;
 
+pub use film::Resolved;
 pub use upload::GpuScene;
 
 use crate::error::{Error, Result};
 use crate::layout::*;
-use crate::output::Film;
+use crate::metrics::{self, ErrorMetrics};
 use crate::scene::Scene;
+use crate::trace::BuildStats;
 use crate::trace::{TraceMode, TraceStructure};
-use crate::trace::rayquery::BuildStats;
-use crate::vk::{Context, MemoryLocation};
+use crate::vk::{Context, GpuTimer, MemoryLocation};
 use ash::vk;
 use primary::PrimaryKernel;
 use std::time::Instant;
 
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
+    /// Samples per pixel: the budget, or the cap when `time` is set.
     pub spp: u32,
+    /// Time budget in seconds of rendering (wall clock, evaluation excluded); None: `spp` only.
+    pub time: Option<f64>,
     pub seed: u64,
     pub trace: TraceMode,
     /// Upper bound on camera samples (pixels × samples) in one submission, so that no dispatch
     /// runs long enough to trip a desktop driver's watchdog.
     pub samples_per_submit: u64,
+    /// Reference image (row-major RGB, the camera's resolution) to measure each pass against.
+    pub reference: Option<Vec<[f32; 3]>>,
+    /// Read the film back after every pass and evaluate it (implied by `reference`).
+    pub evaluate_passes: bool,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
         RenderSettings {
             spp: 16,
+            time: None,
             seed: 0,
             trace: TraceMode::Auto,
             samples_per_submit: 1 << 20,
+            reference: None,
+            evaluate_passes: false,
         }
     }
+}
+
+/// One row of the error-against-time report. Times and samples are cumulative.
+#[derive(Clone, Debug, Default)]
+pub struct PassReport {
+    pub pass: u32,
+    pub spp: u32,
+    /// Sum of the device time of the kernels (timestamp queries); wall time where the queue has
+    /// no timestamps.
+    pub device_seconds: f64,
+    /// Wall-clock time of rendering so far (submission and waiting; evaluation excluded).
+    pub wall_seconds: f64,
+    /// Against the reference, when there is one.
+    pub error: Option<ErrorMetrics>,
+    /// From the half-buffers (needs at least 2 samples).
+    pub estimated_relmse: Option<f64>,
+    pub non_finite_samples: u64,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -44,15 +77,19 @@ pub struct RenderStats {
     pub upload_seconds: f64,
     pub build: BuildStats,
     pub render_seconds: f64,
+    pub device_seconds: f64,
     pub total_seconds: f64,
+    pub spp: u32,
     /// Camera samples whose beauty was NaN or infinite (counted, then replaced by 0).
     pub non_finite_samples: u64,
     pub trace: &'static str,
 }
 
 pub struct RenderOutput {
-    pub film: Film,
+    pub film: crate::output::Film,
     pub stats: RenderStats,
+    /// One entry per pass when passes were evaluated; else only the last.
+    pub passes: Vec<PassReport>,
 }
 
 pub struct Renderer {
@@ -68,8 +105,8 @@ impl Renderer {
         &self.ctx
     }
 
-    /// Renders `scene` at its camera's resolution. `progress(done, total)` is called after every
-    /// submission with the number of samples per pixel completed.
+    /// Renders `scene` at its camera's resolution. `progress(spp_done, spp_budget)` is called
+    /// after every submission (with a time budget, spp_budget is the cap).
     pub fn render(
         &self,
         scene: &Scene,
@@ -79,9 +116,22 @@ impl Renderer {
         let ctx = &self.ctx;
         let t0 = Instant::now();
         if settings.spp == 0 {
-            return Err(Error::Invalid(
-                "samples per pixel must be at least 1".into(),
-            ));
+            return Err(Error::Invalid("samples per pixel must be at least 1".into()));
+        }
+        if let Some(t) = settings.time
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(Error::Invalid(format!("--time must be a positive number of seconds, got {t}")));
+        }
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let pixels = u64::from(w) * u64::from(h);
+        if let Some(r) = &settings.reference
+            && r.len() as u64 != pixels
+        {
+            return Err(Error::Invalid(format!(
+                "the reference has {} pixels, the render {w}x{h} = {pixels}",
+                r.len()
+            )));
         }
         let mode = settings.trace.resolve(ctx)?;
         let gpu = GpuScene::new(ctx, scene, mode == TraceMode::RayQuery)?;
@@ -89,17 +139,14 @@ impl Renderer {
         let trace = TraceStructure::build(ctx, &gpu, mode)?;
         let build = trace.build_stats().clone();
 
-        let (w, h) = (scene.camera.width, scene.camera.height);
-        let pixels = u64::from(w) * u64::from(h);
         let frame = ctx.upload(
             "frame",
             std::slice::from_ref(&gpu.frame),
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
-        let film_bytes = pixels * std::mem::size_of::<FilmPixel>() as u64;
         let film = ctx.create_buffer(
             "film",
-            film_bytes,
+            pixels * std::mem::size_of::<FilmPixel>() as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::TRANSFER_DST
                 | vk::BufferUsageFlags::TRANSFER_SRC,
@@ -107,81 +154,111 @@ impl Renderer {
         )?;
         ctx.one_shot(|cmd| {
             // SAFETY: the film buffer is alive until the wait.
-            unsafe {
-                ctx.device
-                    .cmd_fill_buffer(cmd, film.buffer, 0, vk::WHOLE_SIZE, 0)
-            }
+            unsafe { ctx.device.cmd_fill_buffer(cmd, film.buffer, 0, vk::WHOLE_SIZE, 0) }
         })?;
         let kernel = PrimaryKernel::new(ctx, &gpu, &trace, &frame, &film)?;
+        let timer = GpuTimer::new(ctx)?;
+        let evaluate = settings.evaluate_passes || settings.reference.is_some();
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows.
-        let t1 = Instant::now();
         const TILE: u32 = 512;
         let tile_pixels = u64::from(w.min(TILE)) * u64::from(h.min(TILE));
-        let per_dispatch =
-            (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(settings.spp)) as u32;
-        let mut done = 0;
+        let per_dispatch = (settings.samples_per_submit / tile_pixels).max(1) as u32;
+        let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
+        let mut passes = Vec::new();
+        let mut last = None;
         while done < settings.spp {
-            let n = per_dispatch.min(settings.spp - done);
-            for y0 in (0..h).step_by(TILE as usize) {
-                for x0 in (0..w).step_by(TILE as usize) {
-                    let pass = PassConstants {
-                        first_sample: done,
-                        sample_count: n,
-                        seed_lo: settings.seed as u32,
-                        seed_hi: (settings.seed >> 32) as u32,
-                        tile: [x0, y0, TILE.min(w - x0), TILE.min(h - y0)],
-                    };
-                    ctx.one_shot(|cmd| kernel.record(cmd, &pass))?;
+            // Passes grow by half the samples so far (log-spaced points on the error curve);
+            // under a time budget a pass is sized to the time left at the measured rate.
+            let mut pass = (done / 2).max(1).min(settings.spp - done);
+            if let Some(t) = settings.time {
+                if wall >= t {
+                    break;
+                }
+                if done > 0 {
+                    let rate = f64::from(done) / wall.max(1e-9);
+                    pass = pass.min(((t - wall) * rate).max(1.0) as u32);
                 }
             }
-            done += n;
-            progress(done, settings.spp);
+            let start = Instant::now();
+            let mut k = 0;
+            while k < pass {
+                let n = per_dispatch.min(pass - k);
+                for y0 in (0..h).step_by(TILE as usize) {
+                    for x0 in (0..w).step_by(TILE as usize) {
+                        let pc = PassConstants {
+                            first_sample: done + k,
+                            sample_count: n,
+                            seed_lo: settings.seed as u32,
+                            seed_hi: (settings.seed >> 32) as u32,
+                            tile: [x0, y0, TILE.min(w - x0), TILE.min(h - y0)],
+                        };
+                        ctx.one_shot(|cmd| {
+                            if let Some(t) = &timer {
+                                t.start(cmd);
+                            }
+                            kernel.record(cmd, &pc);
+                            if let Some(t) = &timer {
+                                t.stop(cmd);
+                            }
+                        })?;
+                        if let Some(t) = &timer {
+                            device += t.seconds()?;
+                        }
+                    }
+                }
+                k += n;
+                progress(done + k, settings.spp);
+            }
+            done += pass;
+            let elapsed = start.elapsed().as_secs_f64();
+            wall += elapsed;
+            if timer.is_none() {
+                device += elapsed;
+            }
+            let mut report = PassReport {
+                pass: passes.len() as u32,
+                spp: done,
+                device_seconds: device,
+                wall_seconds: wall,
+                ..Default::default()
+            };
+            if evaluate {
+                let r = film::download_and_resolve(ctx, &film, w, h, done)?;
+                evaluate_pass(&mut report, &r, settings.reference.as_deref());
+                passes.push(report);
+                last = Some(r);
+            } else {
+                passes.clear();
+                passes.push(report);
+            }
         }
-        let render_seconds = t1.elapsed().as_secs_f64();
-        let raw: Vec<FilmPixel> = ctx.download(&film, pixels as usize)?;
-        let (film, non_finite) = resolve(&raw, w, h, settings.spp);
+        let resolved = match last {
+            Some(r) if r.spp == done => r,
+            _ => film::download_and_resolve(ctx, &film, w, h, done)?,
+        };
+        if !evaluate && let Some(p) = passes.last_mut() {
+            evaluate_pass(p, &resolved, settings.reference.as_deref());
+        }
         Ok(RenderOutput {
-            film,
             stats: RenderStats {
                 upload_seconds,
                 build,
-                render_seconds,
+                render_seconds: wall,
+                device_seconds: device,
                 total_seconds: t0.elapsed().as_secs_f64(),
-                non_finite_samples: non_finite,
+                spp: done,
+                non_finite_samples: resolved.non_finite_samples,
                 trace: trace.name(),
             },
+            film: resolved.film,
+            passes,
         })
     }
 }
 
-/// Sums per pixel → means, AOVs and the variance of the beauty mean.
-fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> (Film, u64) {
-    let mut film = Film::new(w, h);
-    let n = f64::from(spp);
-    let mut variance = vec![[0.0f32; 3]; raw.len()];
-    let mut non_finite = 0u64;
-    for (i, p) in raw.iter().enumerate() {
-        for c in 0..3 {
-            let mean = f64::from(p.beauty[c]) / n;
-            film.beauty[i][c] = mean as f32;
-            film.albedo[i][c] = (f64::from(p.albedo[c]) / n) as f32;
-            film.normal[i][c] = (f64::from(p.normal[c]) / n) as f32;
-            film.emission[i][c] = (f64::from(p.emission[c]) / n) as f32;
-            if spp > 1 {
-                let m2 = f64::from(p.beauty_sq[c]) / n;
-                let sample_var = (m2 - mean * mean).max(0.0) * n / (n - 1.0);
-                variance[i][c] = (sample_var / n) as f32;
-            }
-        }
-        let hits = p.albedo[3];
-        film.depth[i] = if hits > 0.0 {
-            p.normal[3] / hits
-        } else {
-            f32::INFINITY
-        };
-        non_finite += p.emission[3] as u64;
-    }
-    film.variance = Some(variance);
-    (film, non_finite)
+fn evaluate_pass(report: &mut PassReport, r: &Resolved, reference: Option<&[[f32; 3]]>) {
+    report.non_finite_samples = r.non_finite_samples;
+    report.estimated_relmse = metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, r.spp);
+    report.error = reference.map(|reference| metrics::compare(&r.film.beauty, reference));
 }

@@ -60,6 +60,9 @@ pub struct Inner {
     pub(crate) command_pool: Mutex<vk::CommandPool>,
     pub limits: vk::PhysicalDeviceLimits,
     pub scratch_alignment: u64,
+    /// Valid bits of timestamps on the queue (0: no timestamps) and nanoseconds per tick.
+    pub timestamp_bits: u32,
+    pub timestamp_period: f64,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     messages: Arc<Mutex<Vec<String>>>,
     owned: bool,
@@ -493,6 +496,10 @@ impl Context {
             let limits = props2.properties.limits;
             let scratch_alignment =
                 u64::from(as_props.min_acceleration_structure_scratch_offset_alignment).max(1);
+            let timestamp_bits = instance
+                .get_physical_device_queue_family_properties(pd)
+                .get(qf as usize)
+                .map_or(0, |q| q.timestamp_valid_bits);
             let allocator = Allocator::new(&instance, &device, pd)?;
             let pool = device
                 .create_command_pool(
@@ -515,6 +522,8 @@ impl Context {
                 command_pool: Mutex::new(pool),
                 limits,
                 scratch_alignment,
+                timestamp_bits,
+                timestamp_period: f64::from(limits.timestamp_period),
                 debug,
                 messages,
                 owned,

@@ -5,8 +5,10 @@ mod commands;
 mod context;
 mod memory;
 mod pipeline;
+mod timer;
 
 pub use context::{Context, ContextOptions, DeviceInfo, ExternalDevice, list_devices};
 pub use gpu_allocator::MemoryLocation;
 pub use memory::Buffer;
 pub use pipeline::ComputePipeline;
+pub use timer::GpuTimer;
