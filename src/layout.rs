@@ -127,10 +127,91 @@ pub struct FilmPixel {
     pub albedo: [f32; 4],
     pub normal: [f32; 4],
     pub emission: [f32; 4],
+    pub beauty_odd: [f32; 4],
 }
 
-/// (struct name, size, [(field, offset)]) for every mirrored struct: what tests/layout.rs checks.
-pub fn reflection() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BvhHeader {
+    pub nodes: u64,
+    pub triangles: u64,
+    pub instances: u64,
+    pub root: u32,
+    pub node_count: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BvhNode {
+    pub lo_x: [f32; 4],
+    pub hi_x: [f32; 4],
+    pub lo_y: [f32; 4],
+    pub hi_y: [f32; 4],
+    pub lo_z: [f32; 4],
+    pub hi_z: [f32; 4],
+    pub links: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BvhTriangle {
+    pub v0: [f32; 3],
+    pub prim: u32,
+    pub v1: [f32; 3],
+    pub pad0: u32,
+    pub v2: [f32; 3],
+    pub pad1: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BvhInstance {
+    pub world_to_object: [[f32; 4]; 3],
+    pub root: u32,
+    pub index: u32,
+    pub mask: u32,
+    pub pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct QueryRay {
+    pub origin: [f32; 3],
+    pub tmin: f32,
+    pub dir: [f32; 3],
+    pub tmax: f32,
+    pub mask: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct QueryHit {
+    pub t: f32,
+    pub kind: u32,
+    pub instance: u32,
+    pub prim: u32,
+    pub bary: [f32; 2],
+    pub occluded: u32,
+    pub pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct QueryConstants {
+    pub rays: u64,
+    pub hits: u64,
+    pub count: u32,
+    pub mode: u32,
+}
+
+/// One mirrored struct: its name, size, and (field, offset) pairs in declaration order.
+pub type StructLayout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+/// Every mirrored struct: what tests/layout.rs checks against the SPIR-V.
+pub fn reflection() -> Vec<StructLayout> {
     macro_rules! describe {
         ($t:ident { $($f:ident),* $(,)? }) => {
             (stringify!($t), std::mem::size_of::<$t>(), vec![$((stringify!($f), std::mem::offset_of!($t, $f))),*])
@@ -226,6 +307,62 @@ pub fn reflection() -> Vec<(&'static str, usize, Vec<(&'static str, usize)>)> {
             albedo,
             normal,
             emission
+        }),
+        describe!(BvhHeader {
+            nodes,
+            triangles,
+            instances,
+            root,
+            node_count
+        }),
+        describe!(BvhNode {
+            lo_x,
+            hi_x,
+            lo_y,
+            hi_y,
+            lo_z,
+            hi_z,
+            links
+        }),
+        describe!(BvhTriangle {
+            v0,
+            prim,
+            v1,
+            pad0,
+            v2,
+            pad1
+        }),
+        describe!(BvhInstance {
+            world_to_object,
+            root,
+            index,
+            mask,
+            pad
+        }),
+        describe!(QueryRay {
+            origin,
+            tmin,
+            dir,
+            tmax,
+            mask,
+            pad0,
+            pad1,
+            pad2
+        }),
+        describe!(QueryHit {
+            t,
+            kind,
+            instance,
+            prim,
+            bary,
+            occluded,
+            pad
+        }),
+        describe!(QueryConstants {
+            rays,
+            hits,
+            count,
+            mode
         }),
     ]
 }

@@ -10,6 +10,7 @@
 #define BINDING_FRAME 0
 #define BINDING_FILM 1
 #define BINDING_TLAS 2
+#define BINDING_BVH 3
 
 // Specialization constants.
 #define SPEC_FEATURES 0
@@ -22,6 +23,7 @@
 #define FEATURE_DOME 8
 #define FEATURE_SUN 16
 #define FEATURE_TEXTURES 32
+#define FEATURE_TRIANGLE_LIGHTS 64
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8
@@ -37,9 +39,13 @@
 #define LIGHT_SPHERE 2
 #define LIGHT_DOME 3
 #define LIGHT_SUN 4
+#define LIGHT_TRIANGLE 5
 
 #define LIGHT_FLAG_TWO_SIDED 1
 #define LIGHT_FLAG_VISIBLE 2
+// The light is the emission of scene geometry (an emissive shape or mesh triangle): it occludes
+// like any geometry and has no separate light surface.
+#define LIGHT_FLAG_GEOMETRY 4
 
 // Microfacet models (GpuLobe.distribution) and Fresnel kinds (GpuLobe.fresnel).
 #define DIST_DBRDF 0
@@ -67,6 +73,18 @@
 #define HIT_SHAPE 2
 
 #define NONE 0xffffffff
+
+// Compute BVH (TRACE_BVH; src/trace/bvh/). A link names a child: an inner node index, or, with
+// BVH_LEAF_BIT set, a leaf of (count - 1) << BVH_LEAF_COUNT_SHIFT | first. Bottom-level leaves
+// are ranges of BvhTriangle; top-level leaves are single BvhInstance entries.
+#define BVH_LEAF_BIT 0x80000000
+#define BVH_LEAF_COUNT_SHIFT 27
+#define BVH_LEAF_FIRST_MASK 0x07ffffff
+#define BVH_MAX_LEAF 8
+// Entries of the traversal stack (enough for the depth the builder allows, top plus bottom level).
+#define BVH_STACK_SIZE 48
+// BvhInstance.root for an analytic shape.
+#define BVH_SHAPE 0xffffffff
 
 // Per-render constants (uniform buffer). Positions are camera-relative: the host subtracts the
 // camera position in double precision, so large world coordinates keep their precision here.
@@ -144,16 +162,23 @@ struct GpuMaterial {
     GpuLobe lobes[2];
 };
 
+// Lights. Emissive geometry becomes lights too (LIGHT_FLAG_GEOMETRY): an emissive analytic shape
+// gives a rect/disk/sphere light whose `shape` is that shape; every triangle of an emissive mesh
+// gives a LIGHT_TRIANGLE (emission textures are read through the instance's uvs when evaluated).
 struct GpuLight {
     vec4 p0;   // rect: centre; disk/sphere: centre, radius; dome: cos, sin of rotation; sun: direction, cos(theta_max)
+               // triangle: vertex 0 (camera-relative world)
     vec4 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
-    vec4 p2;   // rect: full edge v; disk: unit tangent
-    vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence)
+               // triangle: vertex 1; w = triangle index within its mesh (uint bits)
+    vec4 p2;   // rect: full edge v; disk: unit tangent; triangle: vertex 2
+    vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence;
+                     // emissive geometry: the material's emission)
     uint kind;       // LIGHT_*
-    uint texture;    // NONE or texture index
-    uint shape;      // index of its GpuShape when visible to the camera, else NONE
+    uint texture;    // NONE or texture index (emissive geometry: the material's emission texture)
+    uint shape;      // its GpuShape (visible light surface, or the emissive shape), else NONE;
+                     // triangle: the GpuInstance index
     uint flags;      // LIGHT_FLAG_*
-    float area;      // surface area (rect, disk, sphere)
+    float area;      // surface area (rect, disk, sphere, triangle)
 };
 
 struct GpuTexture {
@@ -170,6 +195,82 @@ struct FilmPixel {
     vec4 albedo;     // rgb sum over samples that hit a surface; w = number of such samples
     vec4 normal;     // xyz sum of shading normals; w = sum of hit distances
     vec4 emission;   // rgb sum of directly seen emission; w = samples with non-finite beauty
+    vec4 beauty_odd; // rgb sum over the odd-numbered samples only: the two half-buffers (even =
+                     // beauty - beauty_odd) give an unbiased estimate of the pixel's variance
 };
+
+// The compute BVH: device addresses of its arrays (uniform buffer at BINDING_BVH).
+struct BvhHeader {
+    uint64_t nodes;       // BvhNode array: bottom levels of every mesh, then the top level
+    uint64_t triangles;   // BvhTriangle array in leaf order
+    uint64_t instances;   // BvhInstance array: the top level's leaves
+    uint root;            // link of the top-level root, NONE for an empty scene
+    uint node_count;
+};
+
+// Four children's boxes in SoA form, so that one node fetch tests all of them; an unused slot has
+// an empty box (lo > hi) and link NONE.
+struct BvhNode {
+    vec4 lo_x;
+    vec4 hi_x;
+    vec4 lo_y;
+    vec4 hi_y;
+    vec4 lo_z;
+    vec4 hi_z;
+    uvec4 links;
+};
+
+// A triangle's object-space vertices gathered in leaf order (no index indirection).
+struct BvhTriangle {
+    vec3 v0;
+    uint prim;            // triangle index within its mesh (Hit.prim)
+    vec3 v1;
+    uint pad0;
+    vec3 v2;
+    uint pad1;
+};
+
+// A top-level leaf: a mesh instance or an analytic shape.
+struct BvhInstance {
+    vec4 world_to_object[3];  // rows of the inverse of the instance's object-to-world matrix
+    uint root;                // link of the mesh's bottom-level root, or BVH_SHAPE
+    uint index;               // GpuInstance index (Hit.instance), or shape index (Hit.prim)
+    uint mask;                // MASK_* bits
+    uint pad;
+};
+
+// A ray of glsl/trace_query.comp (the trace interface as a kernel, for tests and benchmarks).
+struct QueryRay {
+    vec3 origin;
+    float tmin;
+    vec3 dir;
+    float tmax;
+    uint mask;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+// What glsl/trace_query.comp reports per ray: trace_closest's Hit and trace_occluded's answer.
+struct QueryHit {
+    float t;
+    uint kind;
+    uint instance;
+    uint prim;
+    vec2 bary;
+    uint occluded;
+    uint pad;
+};
+
+// Push constants of glsl/trace_query.comp.
+struct QueryConstants {
+    uint64_t rays;        // QueryRay array
+    uint64_t hits;        // QueryHit array
+    uint count;           // rays in this dispatch
+    uint mode;            // QUERY_*
+};
+
+#define QUERY_CLOSEST 1
+#define QUERY_OCCLUDED 2
 
 #endif

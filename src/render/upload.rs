@@ -27,8 +27,14 @@ pub struct GpuScene {
     /// Shapes [0, geometry_shapes) are scene geometry; the rest are visible light surfaces.
     pub geometry_shapes: u32,
     pub shapes: Vec<GpuShape>,
+    /// Boxes of the shapes (lo.xyz, hi.xyz), padded so that rounding never clips a hit.
+    pub shape_boxes: Vec<[f32; 6]>,
     /// Camera position in world space: the origin of the render's coordinates.
     pub origin: DVec3,
+    /// Object-space vertex positions and triangle indices of every mesh (the `MeshRange`s index
+    /// them as they do the GPU buffers): what the compute BVH is built from on the host.
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<u32>,
     pub vertex_buffer: Option<Buffer>,
     pub index_buffer: Option<Buffer>,
     pub aabb_buffer: Option<Buffer>,
@@ -116,10 +122,12 @@ impl GpuScene {
 
         // Meshes: one shared vertex and index buffer.
         let mut vertices = Vec::new();
+        let mut positions = Vec::new();
         let mut indices = Vec::new();
         let mut meshes = Vec::new();
         for m in &scene.meshes {
             let first_vertex = vertices.len() as u32;
+            positions.extend_from_slice(&m.positions);
             for (i, p) in m.positions.iter().enumerate() {
                 let n = m.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
                 let uv = m.uvs.as_ref().map_or(glam::Vec2::ZERO, |u| u[i]);
@@ -292,6 +300,71 @@ impl GpuScene {
             }
             lights.push(g);
         }
+        // Emissive geometry is light too: emissive shapes become lights of their own kind, every
+        // triangle of an emissive mesh a triangle light.
+        let emissive = |m: u32| {
+            let m = &scene.materials[m as usize];
+            (m.emission.max_element() > 0.0).then_some(m)
+        };
+        for (si, s) in scene.shapes.iter().enumerate() {
+            let Some(m) = emissive(s.material) else {
+                continue;
+            };
+            let mut g = GpuLight {
+                radiance: v3(m.emission),
+                texture: m.emission_texture.unwrap_or(NONE),
+                shape: si as u32,
+                flags: LIGHT_FLAG_GEOMETRY | if m.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
+                ..Default::default()
+            };
+            let sh = &shapes[si];
+            g.p0 = sh.p0;
+            g.p1 = sh.p1;
+            g.p2 = sh.p2;
+            let pi = std::f32::consts::PI;
+            (g.kind, g.area) = match sh.kind {
+                SHAPE_SPHERE => (LIGHT_SPHERE, 4.0 * pi * sh.p0[3] * sh.p0[3]),
+                SHAPE_RECT => (
+                    LIGHT_RECT,
+                    Vec3::from_slice(&sh.p1[..3])
+                        .cross(Vec3::from_slice(&sh.p2[..3]))
+                        .length(),
+                ),
+                _ => (LIGHT_DISK, pi * sh.p0[3] * sh.p0[3]),
+            };
+            shapes[si].light = lights.len() as u32;
+            lights.push(g);
+            features |= FEATURE_AREA_LIGHTS;
+        }
+        for (ii, inst) in scene.instances.iter().enumerate() {
+            let mesh = &scene.meshes[inst.mesh as usize];
+            let Some(m) = emissive(mesh.material) else {
+                continue;
+            };
+            let rel = DMat4::from_translation(-origin) * inst.transform;
+            let world = |i: u32| rel.transform_point3(mesh.positions[i as usize].as_dvec3());
+            for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
+                let (a, b, c) = (world(tri[0]), world(tri[1]), world(tri[2]));
+                let area = 0.5 * (b - a).cross(c - a).length();
+                if area <= 0.0 {
+                    continue; // degenerate: emits nothing
+                }
+                let mut p1 = v4(b, 0.0);
+                p1[3] = f32::from_bits(t as u32); // bits, not a number: see layout.glsl
+                lights.push(GpuLight {
+                    p0: v4(a, 0.0),
+                    p1,
+                    p2: v4(c, 0.0),
+                    radiance: v3(m.emission),
+                    kind: LIGHT_TRIANGLE,
+                    texture: m.emission_texture.unwrap_or(NONE),
+                    shape: ii as u32,
+                    flags: LIGHT_FLAG_GEOMETRY | if m.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
+                    area: area as f32,
+                });
+                features |= FEATURE_TRIANGLE_LIGHTS;
+            }
+        }
         if !shapes.is_empty() {
             features |= FEATURE_SHAPES;
         }
@@ -403,7 +476,10 @@ impl GpuScene {
             instances,
             geometry_shapes,
             shapes,
+            shape_boxes: aabbs,
             origin,
+            positions,
+            indices,
             vertex_buffer,
             index_buffer,
             aabb_buffer,

@@ -1,0 +1,545 @@
+//! Scene file → validated `Scene`: parsing with field-path tracking, then one pass over the
+//! file's sections in dependency order (textures, materials, shapes, lights, camera).
+
+use super::check::Ctx;
+use super::error::{SceneError, fmt_num, fmt_vec, io_message, quoted};
+use super::format::{
+    FresnelDef, LightDef, LobeDef, MaterialDef, MeshDef, ModelDef, NumOrArray, SceneFile, ShapeDef,
+    TextureDef,
+};
+use super::gltf::{self as gltf_load, GltfCamera};
+use super::texture::{self, ImageKind};
+use super::transform;
+use super::types::*;
+use glam::{DMat4, Vec2, Vec3};
+use indexmap::IndexMap;
+use std::collections::HashMap;
+use std::path::Path;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Everything of a `Scene` but its camera, filled section by section.
+#[derive(Default)]
+pub(crate) struct Parts {
+    pub textures: Vec<Texture>,
+    pub materials: Vec<Material>,
+    pub meshes: Vec<Mesh>,
+    pub instances: Vec<MeshInstance>,
+    pub shapes: Vec<AnalyticShape>,
+    pub lights: Vec<Light>,
+}
+
+pub(crate) fn parse(text: &str, origin: &str) -> Result<SceneFile> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    let file: SceneFile = serde_path_to_error::deserialize(&mut de)
+        .map_err(|e| SceneError::from_json(origin, e.path().to_string(), e.inner()))?;
+    de.end()
+        .map_err(|e| SceneError::from_json(origin, String::new(), &e))?;
+    Ok(file)
+}
+
+pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<Scene> {
+    let ctx = Ctx { file: origin };
+    if file.shapes.0.is_empty() && file.lights.0.is_empty() {
+        return Err(ctx.err(
+            "shapes",
+            "none",
+            "a scene needs at least one shape or light",
+        ));
+    }
+    let mut b = Builder {
+        ctx,
+        base_dir,
+        parts: Parts::default(),
+        texture_ids: IndexMap::new(),
+        material_ids: IndexMap::new(),
+        gltf_cameras: HashMap::new(),
+    };
+    for (name, def) in &file.textures.0 {
+        let tex = b.texture(name, def)?;
+        b.texture_ids
+            .insert(name.clone(), b.parts.textures.len() as TextureId);
+        b.parts.textures.push(tex);
+    }
+    for (name, def) in &file.materials.0 {
+        let mat = b.material(name, def)?;
+        b.material_ids
+            .insert(name.clone(), b.parts.materials.len() as MaterialId);
+        b.parts.materials.push(mat);
+    }
+    for (name, def) in &file.shapes.0 {
+        b.shape(name, def)?;
+    }
+    let (mut dome, mut sun) = (None, None);
+    for (name, def) in &file.lights.0 {
+        let light = b.light(name, def)?;
+        let slot = match light.kind {
+            LightKind::Dome { .. } => Some((&mut dome, "dome")),
+            LightKind::Sun { .. } => Some((&mut sun, "sun")),
+            _ => None,
+        };
+        if let Some((slot, kind)) = slot {
+            if let Some(first) = slot.replace(name.clone()) {
+                return Err(SceneError::unsupported(
+                    origin,
+                    format!("lights.{name}.{kind}"),
+                    format!("a scene has at most one {kind} light, and \"{first}\" is one already"),
+                ));
+            }
+        }
+        b.parts.lights.push(light);
+    }
+    let camera = b.camera(&file.camera, file)?;
+    let p = b.parts;
+    Ok(Scene {
+        camera,
+        materials: p.materials,
+        textures: p.textures,
+        meshes: p.meshes,
+        instances: p.instances,
+        shapes: p.shapes,
+        lights: p.lights,
+        source: None,
+    })
+}
+
+pub(crate) struct Builder<'a> {
+    pub ctx: Ctx<'a>,
+    pub base_dir: &'a Path,
+    pub parts: Parts,
+    pub texture_ids: IndexMap<String, TextureId>,
+    pub material_ids: IndexMap<String, MaterialId>,
+    /// Cameras of each glTF shape, by shape name.
+    pub gltf_cameras: HashMap<String, Vec<GltfCamera>>,
+}
+
+/// "exactly one of" check for shapes and lights; returns the key given.
+fn one_of(ctx: Ctx, field: &str, keys: &[(&'static str, bool)]) -> Result<&'static str> {
+    let given: Vec<&str> = keys.iter().filter(|k| k.1).map(|k| k.0).collect();
+    if given.len() == 1 {
+        return Ok(given[0]);
+    }
+    let all: Vec<String> = keys.iter().map(|k| quoted(k.0)).collect();
+    let got = if given.is_empty() {
+        "none".to_owned()
+    } else {
+        given
+            .iter()
+            .map(|k| quoted(k))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    Err(ctx.err(
+        field,
+        got,
+        &format!("must have exactly one of {}", all.join(", ")),
+    ))
+}
+
+pub(crate) fn known(names: impl Iterator<Item = impl AsRef<str>>) -> String {
+    let list: Vec<String> = names.map(|n| quoted(n.as_ref())).collect();
+    if list.is_empty() {
+        "none are defined".to_owned()
+    } else {
+        format!("known: {}", list.join(", "))
+    }
+}
+
+impl Builder<'_> {
+    fn texture_ref(&self, field: &str, name: &str) -> Result<TextureId> {
+        self.texture_ids.get(name).copied().ok_or_else(|| {
+            self.ctx.err(
+                field,
+                quoted(name),
+                &format!("no such texture ({})", known(self.texture_ids.keys())),
+            )
+        })
+    }
+
+    fn material_ref(&self, field: &str, name: &str) -> Result<MaterialId> {
+        self.material_ids.get(name).copied().ok_or_else(|| {
+            self.ctx.err(
+                field,
+                quoted(name),
+                &format!("no such material ({})", known(self.material_ids.keys())),
+            )
+        })
+    }
+
+    fn texture(&self, name: &str, def: &TextureDef) -> Result<Texture> {
+        let field = format!("textures.{name}.file");
+        let kind = ImageKind::from_path(&def.file).ok_or_else(|| {
+            self.ctx.err(
+                &field,
+                quoted(&def.file),
+                "unsupported image format (expected .png, .jpg, .jpeg, .exr or .hdr)",
+            )
+        })?;
+        let path = self.base_dir.join(&def.file);
+        let bytes = std::fs::read(&path)
+            .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
+        let srgb = def.srgb.unwrap_or(kind.srgb_by_default());
+        texture::decode(name, &bytes, kind, srgb)
+            .map_err(|m| SceneError::decode(self.ctx.file, &field, &def.file, m))
+    }
+
+    fn material(&self, name: &str, def: &MaterialDef) -> Result<Material> {
+        let ctx = self.ctx;
+        let f = format!("materials.{name}");
+        if def.specular.len() > 2 {
+            return Err(ctx.err(
+                format!("{f}.specular"),
+                format!("{} lobes", def.specular.len()),
+                "at most 2 specular lobes are allowed",
+            ));
+        }
+        let specular = def
+            .specular
+            .iter()
+            .enumerate()
+            .map(|(i, lobe)| self.lobe(&format!("{f}.specular[{i}]"), lobe))
+            .collect::<Result<Vec<_>>>()?;
+        let opt_tex = |key: &str, t: &Option<String>| {
+            t.as_deref()
+                .map(|t| self.texture_ref(&format!("{f}.{key}"), t))
+                .transpose()
+        };
+        Ok(Material {
+            name: name.to_owned(),
+            diffuse: ctx.unit_rgb(&format!("{f}.diffuse"), def.diffuse)?,
+            diffuse_texture: opt_tex("diffuse_texture", &def.diffuse_texture)?,
+            specular,
+            metallic_roughness_texture: None,
+            emission: ctx.nonneg_rgb(&format!("{f}.emission"), def.emission)?,
+            emission_texture: opt_tex("emission_texture", &def.emission_texture)?,
+            two_sided: def.two_sided,
+            tangent_direction: def
+                .tangent
+                .map(|t| {
+                    ctx.direction(&format!("{f}.tangent"), t)
+                        .map(|d| d.as_vec3())
+                })
+                .transpose()?,
+        })
+    }
+
+    fn lobe(&self, f: &str, lobe: &LobeDef) -> Result<SpecularLobe> {
+        let ctx = self.ctx;
+        let alpha = |field: String, a: f64| {
+            if a > 0.0 && a <= 1.0 {
+                Ok(a as f32)
+            } else {
+                Err(ctx.err(field, fmt_num(a), "roughness must be in (0, 1]"))
+            }
+        };
+        let alpha = match lobe.roughness {
+            NumOrArray::One(a) => Vec2::splat(alpha(format!("{f}.roughness"), a)?),
+            NumOrArray::Many([t, b]) => Vec2::new(
+                alpha(format!("{f}.roughness[0]"), t)?,
+                alpha(format!("{f}.roughness[1]"), b)?,
+            ),
+        };
+        let fresnel = match &lobe.fresnel {
+            FresnelDef::Constant(c) => {
+                Fresnel::Constant(ctx.unit_rgb(&format!("{f}.fresnel.constant"), *c)?)
+            }
+            FresnelDef::Schlick(f0) => Fresnel::Schlick {
+                f0: ctx.unit_rgb(&format!("{f}.fresnel.schlick"), *f0)?,
+            },
+            FresnelDef::Conductor { eta, k } => Fresnel::Conductor {
+                eta: ctx.positive_rgb(&format!("{f}.fresnel.conductor.eta"), *eta)?,
+                k: ctx.nonneg_rgb(&format!("{f}.fresnel.conductor.k"), *k)?,
+            },
+        };
+        let distribution = match lobe.model {
+            ModelDef::Dbrdf => Distribution::DBrdf,
+            ModelDef::Beckmann => Distribution::BeckmannSmith,
+            ModelDef::Ggx => Distribution::GgxSmith,
+        };
+        Ok(SpecularLobe {
+            distribution,
+            alpha,
+            fresnel,
+        })
+    }
+
+    fn shape(&mut self, name: &str, def: &ShapeDef) -> Result<()> {
+        let ctx = self.ctx;
+        let f = format!("shapes.{name}");
+        let kind = one_of(
+            ctx,
+            &f,
+            &[
+                ("sphere", def.sphere.is_some()),
+                ("rect", def.rect.is_some()),
+                ("disk", def.disk.is_some()),
+                ("mesh", def.mesh.is_some()),
+                ("gltf", def.gltf.is_some()),
+            ],
+        )?;
+        let material = match &def.material {
+            Some(m) => Some(self.material_ref(&format!("{f}.material"), m)?),
+            None if kind == "gltf" => None,
+            None => {
+                return Err(SceneError::unsupported(
+                    ctx.file,
+                    format!("{f}.material"),
+                    format!("missing: {kind} shapes need a material"),
+                ));
+            }
+        };
+        let transform = match &def.transform {
+            Some(_) if !matches!(kind, "mesh" | "gltf") => {
+                return Err(SceneError::unsupported(
+                    ctx.file,
+                    format!("{f}.transform"),
+                    format!(
+                        "{kind} shapes take no transform (analytic shapes are given in world \
+                         space; only mesh and gltf shapes have one)"
+                    ),
+                ));
+            }
+            Some(t) => transform::parse(ctx, &format!("{f}.transform"), t)?,
+            None => DMat4::IDENTITY,
+        };
+        let analytic = |geometry| AnalyticShape {
+            name: name.to_owned(),
+            geometry,
+            material: material.unwrap_or_default(),
+        };
+        if let Some(s) = &def.sphere {
+            let (center, radius) = ctx.sphere(&format!("{f}.sphere"), s)?;
+            self.parts
+                .shapes
+                .push(analytic(ShapeGeometry::Sphere { center, radius }));
+        } else if let Some(r) = &def.rect {
+            let (center, u, v) = ctx.rect(&format!("{f}.rect"), r)?;
+            self.parts
+                .shapes
+                .push(analytic(ShapeGeometry::Rect { center, u, v }));
+        } else if let Some(d) = &def.disk {
+            let (center, normal, radius) = ctx.disk(&format!("{f}.disk"), d)?;
+            self.parts.shapes.push(analytic(ShapeGeometry::Disk {
+                center,
+                normal,
+                radius,
+            }));
+        } else if let Some(m) = &def.mesh {
+            let mesh = self.mesh(&format!("{f}.mesh"), name, m, material.unwrap_or_default())?;
+            self.parts.instances.push(MeshInstance {
+                mesh: self.parts.meshes.len() as u32,
+                transform,
+                name: name.to_owned(),
+            });
+            self.parts.meshes.push(mesh);
+        } else if let Some(g) = &def.gltf {
+            let cameras = gltf_load::load(
+                &gltf_load::Request {
+                    scene_file: ctx.file,
+                    field: &format!("{f}.gltf.file"),
+                    base_dir: self.base_dir,
+                    file: &g.file,
+                    shape: name,
+                    transform,
+                    material_override: material,
+                },
+                &mut self.parts,
+            )?;
+            self.gltf_cameras.insert(name.to_owned(), cameras);
+        }
+        Ok(())
+    }
+
+    fn mesh(&self, f: &str, name: &str, m: &MeshDef, material: MaterialId) -> Result<Mesh> {
+        let ctx = self.ctx;
+        let n = m.positions.len();
+        if n == 0 {
+            return Err(ctx.err(format!("{f}.positions"), "[]", "must not be empty"));
+        }
+        let mut positions = Vec::with_capacity(n);
+        for (i, p) in m.positions.iter().enumerate() {
+            let field = format!("{f}.positions[{i}]");
+            let v = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
+            if !v.is_finite() {
+                return Err(ctx.err(field, fmt_vec(p), "must be finite (as 32-bit floats)"));
+            }
+            positions.push(v);
+        }
+        let per_vertex = |key: &str, len: usize| {
+            if len == n {
+                Ok(())
+            } else {
+                Err(ctx.err(
+                    format!("{f}.{key}"),
+                    format!("{len} entries"),
+                    &format!("must have one entry per position ({n})"),
+                ))
+            }
+        };
+        let normals = match &m.normals {
+            None => None,
+            Some(normals) => {
+                per_vertex("normals", normals.len())?;
+                let mut out = Vec::with_capacity(n);
+                for (i, v) in normals.iter().enumerate() {
+                    out.push(ctx.direction(&format!("{f}.normals[{i}]"), *v)?.as_vec3());
+                }
+                Some(out)
+            }
+        };
+        let uvs = match &m.uvs {
+            None => None,
+            Some(uvs) => {
+                per_vertex("uvs", uvs.len())?;
+                let mut out = Vec::with_capacity(n);
+                for (i, uv) in uvs.iter().enumerate() {
+                    let v = Vec2::new(uv[0] as f32, uv[1] as f32);
+                    if !v.is_finite() {
+                        let field = format!("{f}.uvs[{i}]");
+                        return Err(ctx.err(field, fmt_vec(uv), "must be finite"));
+                    }
+                    out.push(v);
+                }
+                Some(out)
+            }
+        };
+        let indices = match &m.indices {
+            None if n % 3 != 0 => {
+                return Err(ctx.err(
+                    format!("{f}.positions"),
+                    format!("{n} positions"),
+                    "without \"indices\", the number of positions must be a multiple of 3",
+                ));
+            }
+            None => (0..n as u32).collect(),
+            Some(idx) => {
+                if idx.is_empty() || idx.len() % 3 != 0 {
+                    return Err(ctx.err(
+                        format!("{f}.indices"),
+                        format!("{} indices", idx.len()),
+                        "the number of indices must be a non-zero multiple of 3",
+                    ));
+                }
+                if let Some(i) = idx.iter().position(|&i| i as usize >= n) {
+                    return Err(ctx.err(
+                        format!("{f}.indices[{i}]"),
+                        idx[i],
+                        &format!("index out of range (the mesh has {n} positions)"),
+                    ));
+                }
+                idx.clone()
+            }
+        };
+        Ok(Mesh {
+            name: name.to_owned(),
+            positions,
+            normals,
+            tangents: None,
+            uvs,
+            indices,
+            material,
+        })
+    }
+
+    fn light(&self, name: &str, def: &LightDef) -> Result<Light> {
+        let ctx = self.ctx;
+        let f = format!("lights.{name}");
+        let kind = one_of(
+            ctx,
+            &f,
+            &[
+                ("rect", def.rect.is_some()),
+                ("disk", def.disk.is_some()),
+                ("sphere", def.sphere.is_some()),
+                ("dome", def.dome.is_some()),
+                ("sun", def.sun.is_some()),
+            ],
+        )?;
+        if def.two_sided && matches!(kind, "dome" | "sun") {
+            return Err(ctx.err(
+                format!("{f}.two_sided"),
+                true,
+                &format!("a {kind} light cannot be two-sided"),
+            ));
+        }
+        if kind == "sun" && def.texture.is_some() {
+            return Err(SceneError::unsupported(
+                ctx.file,
+                format!("{f}.texture"),
+                "a sun light takes no texture",
+            ));
+        }
+        let g = format!("{f}.{kind}");
+        let kind = if let Some(r) = &def.rect {
+            let (center, u, v) = ctx.rect(&g, r)?;
+            LightKind::Rect { center, u, v }
+        } else if let Some(d) = &def.disk {
+            let (center, normal, radius) = ctx.disk(&g, d)?;
+            LightKind::Disk {
+                center,
+                normal,
+                radius,
+            }
+        } else if let Some(s) = &def.sphere {
+            let (center, radius) = ctx.sphere(&g, s)?;
+            LightKind::Sphere { center, radius }
+        } else if let Some(d) = &def.dome {
+            LightKind::Dome {
+                rotation_deg: ctx.finite(&format!("{g}.rotation"), d.rotation)?,
+            }
+        } else {
+            let s = def
+                .sun
+                .as_ref()
+                .expect("one_of checked that a geometry is present");
+            let field = format!("{g}.angular_diameter");
+            if !(0.0..180.0).contains(&s.angular_diameter) {
+                return Err(ctx.err(
+                    field,
+                    fmt_num(s.angular_diameter),
+                    "must be in [0, 180) degrees",
+                ));
+            }
+            LightKind::Sun {
+                direction: ctx.direction(&format!("{g}.direction"), s.direction)?,
+                angular_diameter_deg: s.angular_diameter,
+            }
+        };
+        let light = Light {
+            name: name.to_owned(),
+            kind,
+            color: ctx.nonneg_rgb(&format!("{f}.color"), def.color)?,
+            intensity: ctx.nonneg_f32(&format!("{f}.intensity"), def.intensity)?,
+            exposure: ctx.f32(&format!("{f}.exposure"), def.exposure)?,
+            two_sided: def.two_sided,
+            texture: def
+                .texture
+                .as_deref()
+                .map(|t| self.texture_ref(&format!("{f}.texture"), t))
+                .transpose()?,
+            visible: def.visible,
+        };
+        if !light.radiance().is_finite() {
+            return Err(ctx.err(
+                f,
+                format!("{}", light.radiance()),
+                "color · intensity · 2^exposure overflows 32-bit floats",
+            ));
+        }
+        Ok(light)
+    }
+}
+
+/// Reads a scene file; its directory is the base for relative paths.
+pub(crate) fn load_file(path: &Path) -> Result<Scene> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+        file: origin.clone(),
+        message: io_message(&e),
+    })?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let file = parse(&text, &origin)?;
+    let mut scene = build(&file, &origin, base)?;
+    scene.source = Some(path.to_path_buf());
+    Ok(scene)
+}
