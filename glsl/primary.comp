@@ -1,99 +1,12 @@
 // illum-variants: rq bvh
-// Primary rays with a box pixel filter, writing the AOVs (albedo, normal, depth, emission) and a
-// preview beauty: emission plus Lambert direct lighting, one light sample per light with a shadow
-// ray (dome: cosine-sampled). The direct-lighting integrator replaces the preview beauty.
+// Camera rays with a box pixel filter: the AOVs (albedo, normal, depth, emission) and the beauty,
+// emission seen directly plus direct lighting at the first hit (glsl/shared/direct.glsl).
 #version 460
-#include "surface.glsl"
+#include "direct.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
 layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
 layout(push_constant, scalar) uniform PassBlock { PassConstants pc; };
-
-// One-sample Lambert direct lighting from light `li` (radiance over pdf, times cos, times V).
-vec3 preview_light(uint li, Surface s, inout Rng rng) {
-    GpuLight l = get_light(li);
-    vec2 u = rng_next2(rng);
-    vec3 n = s.ns;
-    vec3 wi;
-    float dist;
-    vec3 L_over_pdf;
-    if (has_feature(FEATURE_AREA_LIGHTS) && (l.kind == LIGHT_RECT || l.kind == LIGHT_DISK)) {
-        vec3 x, nl;
-        vec2 tuv;
-        if (l.kind == LIGHT_RECT) {
-            x = l.p0.xyz + (u.x - 0.5) * l.p1.xyz + (u.y - 0.5) * l.p2.xyz;
-            nl = normalize(cross(l.p1.xyz, l.p2.xyz));
-            tuv = u;
-        } else {
-            vec2 dk = concentric_disk(u);
-            x = l.p0.xyz + l.p0.w * (dk.x * l.p2.xyz + dk.y * cross(l.p1.xyz, l.p2.xyz));
-            nl = l.p1.xyz;
-            tuv = 0.5 * dk + 0.5;
-        }
-        vec3 dv = x - s.p;
-        float d2 = dot(dv, dv);
-        dist = sqrt(d2);
-        wi = dv / dist;
-        float cl = -dot(nl, wi);
-        if ((l.flags & LIGHT_FLAG_TWO_SIDED) != 0u) cl = abs(cl);
-        if (cl <= 0.0 || d2 == 0.0) return vec3(0.0);
-        L_over_pdf = l.radiance * texture_lookup(l.texture, tuv).rgb * (l.area * cl / d2);
-    } else if (has_feature(FEATURE_AREA_LIGHTS) && l.kind == LIGHT_SPHERE) {
-        // Cone sampling of the visible cap with the stable 1 - cos(theta_max) (TECHNIQUES.md 2.2).
-        vec3 dc = l.p0.xyz - s.p;
-        float dd2 = dot(dc, dc);
-        float r2 = l.p0.w * l.p0.w;
-        if (dd2 <= r2) return vec3(0.0);
-        float s2max = r2 / dd2;
-        float cmax = sqrt(max(0.0, 1.0 - s2max));
-        float om = s2max / (1.0 + cmax);
-        float omc = u.x * om;
-        float ct = 1.0 - omc;
-        float st = sqrt(max(0.0, omc * (2.0 - omc)));
-        float phi = 2.0 * PI * u.y;
-        float dlen = sqrt(dd2);
-        vec3 z = dc / dlen, t, b;
-        make_basis(z, t, b);
-        wi = st * cos(phi) * t + st * sin(phi) * b + ct * z;
-        dist = (dd2 - r2) / (dlen * ct + sqrt(max(0.0, dd2 * (s2max - st * st))));
-        L_over_pdf = l.radiance * (2.0 * PI * om);
-    } else if (has_feature(FEATURE_SUN) && l.kind == LIGHT_SUN) {
-        // Uniform cone about the sun direction; delta light when the cone is empty.
-        float om = l.p1.x;
-        if (om <= 0.0) {
-            wi = l.p0.xyz;
-            L_over_pdf = l.radiance;
-        } else {
-            float omc = u.x * om;
-            float st = sqrt(max(0.0, omc * (2.0 - omc)));
-            float phi = 2.0 * PI * u.y;
-            vec3 t, b;
-            make_basis(l.p0.xyz, t, b);
-            wi = st * cos(phi) * t + st * sin(phi) * b + (1.0 - omc) * l.p0.xyz;
-            // L = E / (pi sin^2 theta_s), pdf = 1 / (2 pi om): L / pdf = E 2 om / sin^2 theta_s.
-            float s2 = om * (2.0 - om);
-            L_over_pdf = l.radiance * (2.0 * om / s2);
-        }
-        dist = INF;
-    } else if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME) {
-        vec3 t, b;
-        make_basis(n, t, b);
-        vec3 c = cosine_hemisphere(u);
-        wi = c.x * t + c.y * b + c.z * n;
-        dist = INF;
-        // Cosine sampling: f cos / pdf = albedo, so return L * pi / cos to cancel below.
-        float cw = max(dot(wi, n), 1e-8);
-        L_over_pdf = dome_radiance(wi) * (PI / cw);
-    } else {
-        return vec3(0.0);
-    }
-    float cs = dot(wi, n);
-    if (cs <= 0.0 || dot(wi, s.ng) <= 0.0) return vec3(0.0);
-    vec3 o = offset_ray_origin(s.p, s.ng);
-    float tmax = dist == INF ? INF : dist * (1.0 - 1e-4);
-    if (trace_occluded(o, wi, 0.0, tmax, MASK_GEOMETRY)) return vec3(0.0);
-    return L_over_pdf * cs * INV_PI;
-}
 
 void main() {
     uvec2 local = gl_GlobalInvocationID.xy;
@@ -120,13 +33,9 @@ void main() {
             acc.normal += vec4(s.ns, h.t);
             if (s.material != NONE) {
                 GpuMaterial m = get_material(s.material);
-                vec3 albedo = m.diffuse * texture_lookup(m.diffuse_texture, s.uv).rgb;
-                acc.albedo += vec4(albedo, 1.0);
-                // Shade the side the camera sees.
-                if (dot(s.ng, d) > 0.0) { s.ng = -s.ng; s.ns = -s.ns; }
-                vec3 direct = vec3(0.0);
-                for (uint li = 0u; li < frame.size.z; ++li) direct += preview_light(li, s, rng);
-                beauty += albedo * direct;
+                Shading sh = shading_at(s, m, d);
+                acc.albedo += vec4(sh.albedo, 1.0);
+                beauty += direct_lighting(sh, m, rng);
             } else {
                 acc.albedo.w += 1.0;
             }

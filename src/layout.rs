@@ -17,6 +17,7 @@ pub struct Frame {
     pub cam_up: [f32; 4],
     pub size: [u32; 4],
     pub counts: [u32; 4],
+    pub integrator: [u32; 4],
     pub instances: u64,
     pub vertices: u64,
     pub indices: u64,
@@ -25,6 +26,7 @@ pub struct Frame {
     pub lights: u64,
     pub textures: u64,
     pub texels: u64,
+    pub dome_sampling: u64,
 }
 
 #[repr(C)]
@@ -108,6 +110,17 @@ pub struct GpuLight {
     pub shape: u32,
     pub flags: u32,
     pub area: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuDomeSampling {
+    pub marginal: u64,
+    pub conditional: u64,
+    pub width: u32,
+    pub height: u32,
+    pub integral: f32,
+    pub pad: u32,
 }
 
 #[repr(C)]
@@ -224,6 +237,7 @@ pub fn reflection() -> Vec<StructLayout> {
             cam_up,
             size,
             counts,
+            integrator,
             instances,
             vertices,
             indices,
@@ -231,7 +245,8 @@ pub fn reflection() -> Vec<StructLayout> {
             shapes,
             lights,
             textures,
-            texels
+            texels,
+            dome_sampling
         }),
         describe!(PassConstants {
             first_sample,
@@ -295,6 +310,14 @@ pub fn reflection() -> Vec<StructLayout> {
             flags,
             area
         }),
+        describe!(GpuDomeSampling {
+            marginal,
+            conditional,
+            width,
+            height,
+            integral,
+            pad
+        }),
         describe!(GpuTexture {
             offset,
             width,
@@ -306,7 +329,8 @@ pub fn reflection() -> Vec<StructLayout> {
             beauty_sq,
             albedo,
             normal,
-            emission
+            emission,
+            beauty_odd
         }),
         describe!(BvhHeader {
             nodes,

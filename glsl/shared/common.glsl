@@ -53,6 +53,34 @@ vec2 concentric_disk(vec2 u) {
     return r * vec2(cos(phi), sin(phi));
 }
 
+// Equirectangular (lat-long) map of directions, as the dome and the sphere's surface uv use it:
+// the direction is first rotated about +Y by the angle whose (cos, sin) is rot_cos_sin; then
+// u = longitude / (2 pi) + 1/2 with longitude atan(r.x, -r.z), v = theta / pi with theta measured
+// from +Y (v = 0 at +Y, the top row of the image).
+vec2 direction_to_latlong(vec3 d, vec2 rot_cos_sin) {
+    vec3 r = vec3(rot_cos_sin.x * d.x - rot_cos_sin.y * d.z, d.y, rot_cos_sin.y * d.x + rot_cos_sin.x * d.z);
+    float phi = atan(r.x, -r.z);
+    float theta = acos(clamp(r.y, -1.0, 1.0));
+    return vec2(phi * (0.5 * INV_PI) + 0.5, theta * INV_PI);
+}
+
+// Inverse of direction_to_latlong, given sin and cos of theta = pi uv.y (passed in so that callers
+// can compute sin(theta) without cancellation near the poles).
+vec3 latlong_to_direction(vec2 uv, float sin_theta, float cos_theta, vec2 rot_cos_sin) {
+    float phi = 2.0 * PI * (uv.x - 0.5);
+    vec3 r = vec3(sin_theta * sin(phi), cos_theta, -sin_theta * cos(phi));
+    // Rotation back: the transpose of the rotation in direction_to_latlong.
+    return vec3(rot_cos_sin.x * r.x + rot_cos_sin.y * r.z, r.y, -rot_cos_sin.y * r.x + rot_cos_sin.x * r.z);
+}
+
+// Uniform direction on the unit sphere; pdf = 1 / (4 pi).
+vec3 uniform_sphere(vec2 u) {
+    float z = 1.0 - 2.0 * u.x;
+    float r = sqrt(max(0.0, 1.0 - z * z));
+    float phi = 2.0 * PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
 // Cosine-weighted hemisphere about +z; pdf = cos(theta) / pi.
 vec3 cosine_hemisphere(vec2 u) {
     vec2 d = concentric_disk(u);

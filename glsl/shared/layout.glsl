@@ -51,6 +51,7 @@
 #define DIST_DBRDF 0
 #define DIST_BECKMANN_SMITH 1
 #define DIST_GGX_SMITH 2
+#define DIST_GGX_SMITH_SEPARABLE 3
 #define FRESNEL_CONSTANT 0
 #define FRESNEL_SCHLICK 1
 #define FRESNEL_CONDUCTOR 2
@@ -66,6 +67,15 @@
 // (lights do not occlude each other, the convention of TECHNIQUES.md 3.3).
 #define MASK_GEOMETRY 1
 #define MASK_LIGHTS 2
+
+// Direct-lighting techniques (Frame.integrator.x): BRDF sampling only, light sampling only, or
+// both combined by multiple importance sampling (the power heuristic).
+#define TECHNIQUE_BRDF 0
+#define TECHNIQUE_LIGHT 1
+#define TECHNIQUE_MIS 2
+// Frame.integrator.w: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
+// course lights diffuse with light samples only).
+#define INTEGRATOR_DIFFUSE_MIS 1
 
 // Hit kinds reported by the trace interface.
 #define HIT_NONE 0
@@ -94,6 +104,8 @@ struct Frame {
     vec4 cam_up;          // xyz: up, scaled by tan(fov_y / 2)
     uvec4 size;           // width, height, light count, shape count
     uvec4 counts;         // instance count, material count, texture count, dome light index or NONE
+    uvec4 integrator;     // technique (TECHNIQUE_*), most light samples per light, BRDF samples per
+                          // lobe, flags (INTEGRATOR_*)
     uint64_t instances;   // device addresses of the scene buffers (0 when absent)
     uint64_t vertices;
     uint64_t indices;
@@ -102,6 +114,7 @@ struct Frame {
     uint64_t lights;
     uint64_t textures;
     uint64_t texels;
+    uint64_t dome_sampling;   // GpuDomeSampling of the dome's map (0: none; uniform sampling)
 };
 
 // Per-dispatch constants.
@@ -169,8 +182,8 @@ struct GpuLight {
     vec4 p0;   // rect: centre; disk/sphere: centre, radius; dome: cos, sin of rotation; sun: direction, cos(theta_max)
                // triangle: vertex 0 (camera-relative world)
     vec4 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
-               // triangle: vertex 1; w = triangle index within its mesh (uint bits)
-    vec4 p2;   // rect: full edge v; disk: unit tangent; triangle: vertex 2
+               // triangle: edge v1 - v0; w = triangle index within its mesh (uint bits)
+    vec4 p2;   // rect: full edge v; disk: unit tangent; triangle: edge v2 - v0 (normal: normalize(p1 x p2))
     vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence;
                      // emissive geometry: the material's emission)
     uint kind;       // LIGHT_*
@@ -179,6 +192,19 @@ struct GpuLight {
                      // triangle: the GpuInstance index
     uint flags;      // LIGHT_FLAG_*
     float area;      // surface area (rect, disk, sphere, triangle)
+};
+
+// Importance-sampling tables of a dome's equirectangular map (src/render/dome.rs builds them;
+// glsl/shared/light_sampling.glsl reads them). Texel weights are lum(tint * texel) filtered with the
+// texel integral of the bilinear lookup (a 3x3 tent, so every texel the bilinear radiance reaches
+// has a weight > 0) times sin(theta) at the row centre. width == 0: no table (uniform sphere).
+struct GpuDomeSampling {
+    uint64_t marginal;     // float[height + 1]: CDF over rows, marginal[0] = 0, marginal[height] = 1
+    uint64_t conditional;  // float[height * (width + 1)]: per row, CDF over its texels, 0 ... 1
+    uint width;
+    uint height;
+    float integral;        // mean texel weight (sum / (width height)), for diagnostics
+    uint pad;
 };
 
 struct GpuTexture {

@@ -50,14 +50,6 @@ vec4 texture_lookup(uint tex, vec2 uv) {
     return acc;
 }
 
-// Equirectangular lookup: u = longitude (rotated), v = 0 at +Y.
-vec2 direction_to_latlong(vec3 d, vec2 rot_cos_sin) {
-    vec3 r = vec3(rot_cos_sin.x * d.x - rot_cos_sin.y * d.z, d.y, rot_cos_sin.y * d.x + rot_cos_sin.x * d.z);
-    float phi = atan(r.x, -r.z);
-    float theta = acos(clamp(r.y, -1.0, 1.0));
-    return vec2(phi * (0.5 * INV_PI) + 0.5, theta * INV_PI);
-}
-
 vec3 dome_radiance(vec3 dir) {
     if (!has_feature(FEATURE_DOME) || frame.counts.w == NONE) return vec3(0.0);
     GpuLight l = get_light(frame.counts.w);

@@ -15,6 +15,14 @@ layout(scalar, binding = 6) buffer B6 { GpuMaterial material_v[]; };
 layout(scalar, binding = 7) buffer B7 { GpuLight light_v[]; };
 layout(scalar, binding = 8) buffer B8 { GpuTexture texture_v[]; };
 layout(scalar, binding = 9) buffer B9 { FilmPixel film_v[]; };
+layout(scalar, binding = 10) buffer B10 { BvhHeader bvh_header_v[]; };
+layout(scalar, binding = 11) buffer B11 { BvhNode bvh_node_v[]; };
+layout(scalar, binding = 12) buffer B12 { BvhTriangle bvh_triangle_v[]; };
+layout(scalar, binding = 13) buffer B13 { BvhInstance bvh_instance_v[]; };
+layout(scalar, binding = 14) buffer B14 { QueryRay query_ray_v[]; };
+layout(scalar, binding = 15) buffer B15 { QueryHit query_hit_v[]; };
+layout(scalar, binding = 16) buffer B16 { QueryConstants query_constants_v[]; };
+layout(scalar, binding = 17) buffer B17 { GpuDomeSampling dome_sampling_v[]; };
 void main() {
     uint i = gl_GlobalInvocationID.x;
     frame_v[i + 1] = frame_v[i];
@@ -27,4 +35,12 @@ void main() {
     light_v[i + 1] = light_v[i];
     texture_v[i + 1] = texture_v[i];
     film_v[i + 1] = film_v[i];
+    dome_sampling_v[i + 1] = dome_sampling_v[i];
+    bvh_header_v[i + 1] = bvh_header_v[i];
+    bvh_node_v[i + 1] = bvh_node_v[i];
+    bvh_triangle_v[i + 1] = bvh_triangle_v[i];
+    bvh_instance_v[i + 1] = bvh_instance_v[i];
+    query_ray_v[i + 1] = query_ray_v[i];
+    query_hit_v[i + 1] = query_hit_v[i];
+    query_constants_v[i + 1] = query_constants_v[i];
 }

@@ -6,6 +6,7 @@
 //! compared with a reference (RMSE, relMSE, MAE) or, without one, its relMSE is estimated from the
 //! even and odd half-buffers (see [`crate::metrics`]).
 
+pub mod dome;
 mod film;
 mod primary;
 mod upload;
@@ -24,8 +25,69 @@ use ash::vk;
 use primary::PrimaryKernel;
 use std::time::Instant;
 
+/// How direct lighting is estimated (TECHNIQUES.md §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Technique {
+    /// BRDF sampling only: lights are found by the BRDF samples that hit them.
+    Brdf,
+    /// Light sampling only (delta lobes then see no light).
+    Light,
+    /// Both, combined by multiple importance sampling with the power heuristic.
+    #[default]
+    Mis,
+}
+
+impl Technique {
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::Brdf => "brdf",
+            Technique::Light => "light",
+            Technique::Mis => "mis",
+        }
+    }
+}
+
+impl std::str::FromStr for Technique {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "brdf" => Ok(Technique::Brdf),
+            "light" => Ok(Technique::Light),
+            "mis" => Ok(Technique::Mis),
+            _ => Err(format!(
+                "unknown technique {s:?} (expected brdf, light or mis)"
+            )),
+        }
+    }
+}
+
+/// Sample counts and switches of the direct-lighting integrator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IntegratorSettings {
+    pub technique: Technique,
+    /// Most light samples per light and camera sample; each light takes
+    /// ceil(its solid-angle share of the hemisphere × this), at least 1 (the course's rule).
+    pub light_samples: u32,
+    /// BRDF samples per specular lobe (and for the diffuse lobe under BRDF sampling or diffuse MIS).
+    pub brdf_samples: u32,
+    /// Diffuse also by MIS with cosine-sampled BRDF samples (the course: light samples only).
+    pub diffuse_mis: bool,
+}
+
+impl Default for IntegratorSettings {
+    fn default() -> Self {
+        IntegratorSettings {
+            technique: Technique::Mis,
+            light_samples: 4,
+            brdf_samples: 2,
+            diffuse_mis: false,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
+    pub integrator: IntegratorSettings,
     /// Samples per pixel: the budget, or the cap when `time` is set.
     pub spp: u32,
     /// Time budget in seconds of rendering (wall clock, evaluation excluded); None: `spp` only.
@@ -44,6 +106,7 @@ pub struct RenderSettings {
 impl Default for RenderSettings {
     fn default() -> Self {
         RenderSettings {
+            integrator: IntegratorSettings::default(),
             spp: 16,
             time: None,
             seed: 0,
@@ -116,12 +179,16 @@ impl Renderer {
         let ctx = &self.ctx;
         let t0 = Instant::now();
         if settings.spp == 0 {
-            return Err(Error::Invalid("samples per pixel must be at least 1".into()));
+            return Err(Error::Invalid(
+                "samples per pixel must be at least 1".into(),
+            ));
         }
         if let Some(t) = settings.time
             && !(t.is_finite() && t > 0.0)
         {
-            return Err(Error::Invalid(format!("--time must be a positive number of seconds, got {t}")));
+            return Err(Error::Invalid(format!(
+                "--time must be a positive number of seconds, got {t}"
+            )));
         }
         let (w, h) = (scene.camera.width, scene.camera.height);
         let pixels = u64::from(w) * u64::from(h);
@@ -133,8 +200,29 @@ impl Renderer {
                 r.len()
             )));
         }
+        let it = &settings.integrator;
+        if !(1..=64).contains(&it.light_samples) || !(1..=64).contains(&it.brdf_samples) {
+            return Err(Error::Invalid(format!(
+                "light and BRDF sample counts must be in 1..=64, got {} and {}",
+                it.light_samples, it.brdf_samples
+            )));
+        }
         let mode = settings.trace.resolve(ctx)?;
-        let gpu = GpuScene::new(ctx, scene, mode == TraceMode::RayQuery)?;
+        let mut gpu = GpuScene::new(ctx, scene, mode == TraceMode::RayQuery)?;
+        gpu.frame.integrator = [
+            match it.technique {
+                Technique::Brdf => TECHNIQUE_BRDF,
+                Technique::Light => TECHNIQUE_LIGHT,
+                Technique::Mis => TECHNIQUE_MIS,
+            },
+            it.light_samples,
+            it.brdf_samples,
+            if it.diffuse_mis {
+                INTEGRATOR_DIFFUSE_MIS
+            } else {
+                0
+            },
+        ];
         let upload_seconds = t0.elapsed().as_secs_f64();
         let trace = TraceStructure::build(ctx, &gpu, mode)?;
         let build = trace.build_stats().clone();
@@ -154,7 +242,10 @@ impl Renderer {
         )?;
         ctx.one_shot(|cmd| {
             // SAFETY: the film buffer is alive until the wait.
-            unsafe { ctx.device.cmd_fill_buffer(cmd, film.buffer, 0, vk::WHOLE_SIZE, 0) }
+            unsafe {
+                ctx.device
+                    .cmd_fill_buffer(cmd, film.buffer, 0, vk::WHOLE_SIZE, 0)
+            }
         })?;
         let kernel = PrimaryKernel::new(ctx, &gpu, &trace, &frame, &film)?;
         let timer = GpuTimer::new(ctx)?;

@@ -349,12 +349,12 @@ impl GpuScene {
                 if area <= 0.0 {
                     continue; // degenerate: emits nothing
                 }
-                let mut p1 = v4(b, 0.0);
+                let mut p1 = v4(b - a, 0.0);
                 p1[3] = f32::from_bits(t as u32); // bits, not a number: see layout.glsl
                 lights.push(GpuLight {
                     p0: v4(a, 0.0),
                     p1,
-                    p2: v4(c, 0.0),
+                    p2: v4(c - a, 0.0),
                     radiance: v3(m.emission),
                     kind: LIGHT_TRIANGLE,
                     texture: m.emission_texture.unwrap_or(NONE),
@@ -437,6 +437,22 @@ impl GpuScene {
         let texture_buffer = upload(ctx, "textures", &textures, storage)?;
         let texel_buffer = upload(ctx, "texels", &texels, storage)?;
 
+        // Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
+        let mut dome_table = None;
+        let mut dome_sampling = None;
+        if dome != NONE
+            && let Some(t) = scene.lights[dome as usize].texture
+        {
+            let table = super::dome::build(
+                &scene.textures[t as usize],
+                scene.lights[dome as usize].radiance(),
+            );
+            let data = ctx.upload("dome CDFs", &table.data(), storage)?;
+            let gpu = table.gpu(data.address);
+            dome_sampling =
+                Some(ctx.upload("dome sampling", std::slice::from_ref(&gpu), storage)?);
+            dome_table = Some(data);
+        }
         let cam = &scene.camera;
         let forward = (cam.look_at - cam.position).normalize();
         let right_dir = forward.cross(cam.up).normalize();
@@ -460,6 +476,8 @@ impl GpuScene {
                 textures.len() as u32,
                 dome,
             ],
+            // Set by the renderer from its settings.
+            integrator: [0; 4],
             instances: addr(&instance_buffer),
             vertices: addr(&vertex_buffer),
             indices: addr(&index_buffer),
@@ -468,6 +486,7 @@ impl GpuScene {
             lights: addr(&light_buffer),
             textures: addr(&texture_buffer),
             texels: addr(&texel_buffer),
+            dome_sampling: addr(&dome_sampling),
         };
         Ok(GpuScene {
             frame,
@@ -490,6 +509,8 @@ impl GpuScene {
                 light_buffer,
                 texture_buffer,
                 texel_buffer,
+                dome_table,
+                dome_sampling,
             ]
             .into_iter()
             .flatten()

@@ -1,0 +1,238 @@
+// The direct-lighting integrator of "Physically Based Lighting at Pixar" (Hery & Villemin 2013),
+// TECHNIQUES.md section 3.2: per light and per lobe, light samples and BRDF samples combined by
+// multiple importance sampling (power heuristic), BRDF samples pruned to those that hit a light,
+// and shadow rays traced only for the samples whose MIS-weighted contribution is not zero.
+//
+// Conventions:
+// * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
+//   `share` its solid angle over the hemisphere's 2 pi (1 for the dome), N_L in [1, N_max]. Above
+//   DIRECT_LOOP_LIGHTS lights, N_max samples are spread over the lights instead, each picking a light
+//   with probability proportional to an estimate of its contribution (power x solid angle x
+//   cosine); light l then has the expected count n_l = N_max P(l) in every MIS weight.
+// * BRDF samples: N_B per specular lobe, drawn once and shared by all lights (N_B counts every
+//   sample, also those that miss all lights or fall below the horizon). The diffuse lobe takes N_B
+//   cosine samples under TECHNIQUE_BRDF, or under MIS with INTEGRATOR_DIFFUSE_MIS; otherwise light
+//   samples only, as in the course.
+// * Lights along a ray: every light a BRDF sample crosses counts, and light surfaces do not occlude
+//   (shadow rays see MASK_GEOMETRY only); emissive geometry is geometry and occludes. Both
+//   techniques use the same shadow rays, so the MIS weights sum to one.
+// * Finding the lights a BRDF sample hits is a loop over the lights (light_hit), O(lights).
+#ifndef ILLUM_DIRECT_GLSL
+#define ILLUM_DIRECT_GLSL
+
+#include "surface.glsl"
+#include "microfacet.glsl"
+#include "light_sampling.glsl"
+#include "mis.glsl"
+
+#define DIRECT_LOOP_LIGHTS 8u
+
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeSamplingRef { GpuDomeSampling v; };
+
+GpuDomeSampling dome_sampling() {
+    GpuDomeSampling d;
+    d.marginal = 0ul; d.conditional = 0ul; d.width = 0u; d.height = 0u; d.integral = 0.0; d.pad = 0u;
+    if (has_feature(FEATURE_DOME) && frame.dome_sampling != 0ul) d = DomeSamplingRef(frame.dome_sampling).v;
+    return d;
+}
+
+// Emitted radiance of light l toward the shading point, at light-surface coordinates uv.
+vec3 light_radiance(GpuLight l, vec2 uv, bool delta) {
+    if (l.kind == LIGHT_SUN) {
+        // The sun's E_perp spread over its cone: L = E / (pi sin^2 theta_s); a delta sun gives E.
+        if (delta) return l.radiance;
+        float om = l.p1.x;
+        return l.radiance / (PI * om * (2.0 - om));
+    }
+    // Triangle lights ignore emission textures (their uv would need the mesh's vertex uvs).
+    if (l.kind == LIGHT_TRIANGLE) return l.radiance;
+    return l.radiance * texture_lookup(l.texture, uv).rgb;
+}
+
+// Share of the hemisphere's solid angle a light covers from p (an estimate for sample counts and
+// light selection: any positive function is unbiased).
+float light_share(GpuLight l, vec3 p) {
+    if (l.kind == LIGHT_DOME) return 1.0;
+    if (l.kind == LIGHT_SUN) return max(l.p1.x, 1e-6);
+    if (l.kind == LIGHT_SPHERE) {
+        vec3 d = l.p0.xyz - p;
+        float d2 = dot(d, d), r2 = l.p0.w * l.p0.w;
+        if (d2 <= r2) return 1.0;
+        float s2 = r2 / d2;
+        return s2 / (1.0 + sqrt(max(0.0, 1.0 - s2)));   // 1 - cos(theta_max), stable
+    }
+    vec3 c = l.kind == LIGHT_TRIANGLE ? l.p0.xyz + (l.p1.xyz + l.p2.xyz) / 3.0 : l.p0.xyz;
+    vec3 d = c - p;
+    float d2 = max(dot(d, d), 1e-30);
+    return min(l.area / (2.0 * PI * d2), 1.0);
+}
+
+uint light_count_for(GpuLight l, vec3 p, uint n_max) {
+    return clamp(uint(ceil(light_share(l, p) * float(n_max))), 1u, n_max);
+}
+
+// Selection weight of a light at p (many-light mode): luminance x share, with a floor on the
+// cosine factor so that every light that may contribute keeps a positive probability.
+float light_importance(GpuLight l, vec3 p, vec3 n) {
+    float lum = luminance(l.radiance);
+    if (l.kind == LIGHT_DOME || l.kind == LIGHT_SUN) return lum * (l.kind == LIGHT_SUN ? 1.0 : 2.0 * PI);
+    vec3 c = l.kind == LIGHT_TRIANGLE ? l.p0.xyz + (l.p1.xyz + l.p2.xyz) / 3.0 : l.p0.xyz;
+    vec3 d = c - p;
+    float len = length(d);
+    float cosc = len > 0.0 ? dot(n, d / len) : 1.0;
+    return lum * light_share(l, p) * (0.1 + max(cosc, 0.0)) + 1e-20;
+}
+
+struct Shading {
+    vec3 p;        // shading point
+    vec3 origin;   // offset ray origin (Waechter & Binder) on the viewer's side
+    vec3 ng;       // geometric normal, on the viewer's side
+    vec3 n, t, b;  // shading frame, n on the viewer's side
+    vec3 v;        // toward the viewer
+    vec3 albedo;   // Lambert rho
+};
+
+// Sum of the lobes' f cos for direction l (light samples), with each specular lobe's MIS weight
+// against its own BRDF samples. `n_l_pdf` is n_l p_l of the light technique (0 for a delta light).
+vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique, bool diffuse_mis, uint n_b) {
+    float cs = dot(sh.n, l);
+    if (cs <= 0.0 || dot(sh.ng, l) <= 0.0) return vec3(0.0);
+    vec3 sum = vec3(0.0);
+    // Diffuse: light samples alone, or MIS with n_b cosine samples.
+    float wd = 1.0;
+    if (technique == TECHNIQUE_MIS && diffuse_mis && n_l_pdf > 0.0)
+        wd = mis_power(1.0, n_l_pdf, float(n_b), cs * INV_PI);
+    sum += sh.albedo * (cs * INV_PI) * wd;
+    for (uint k = 0u; k < min(m.lobe_count, 2u); ++k) {
+        BrdfEval e = brdf_eval(m.lobes[k], sh.n, sh.t, sh.b, sh.v, l);
+        float w = 1.0;
+        if (technique == TECHNIQUE_MIS && n_l_pdf > 0.0) w = mis_power(1.0, n_l_pdf, float(n_b), e.pdf);
+        sum += e.f_cos * w;
+    }
+    return sum;
+}
+
+// Adds c if the segment from the shading point along w up to `dist` is unoccluded.
+vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
+    if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
+    float tmax = dist == INF ? INF : dist * (1.0 - 1e-4);
+    return trace_occluded(sh.origin, w, 0.0, tmax, MASK_GEOMETRY) ? vec3(0.0) : c;
+}
+
+vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
+    uint nlights = frame.size.z;
+    if (nlights == 0u) return vec3(0.0);
+    uint technique = frame.integrator.x;
+    uint n_max = frame.integrator.y;
+    uint n_b = frame.integrator.z;
+    bool diffuse_mis = (frame.integrator.w & INTEGRATOR_DIFFUSE_MIS) != 0u;
+    GpuDomeSampling dome = dome_sampling();
+    bool many = nlights > DIRECT_LOOP_LIGHTS;
+    float total_importance = 0.0;
+    if (many) {
+        for (uint i = 0u; i < nlights; ++i) total_importance += light_importance(get_light(i), sh.p, sh.n);
+    }
+    vec3 result = vec3(0.0);
+
+    // Light samples.
+    if (technique != TECHNIQUE_BRDF) {
+        uint rounds = many ? n_max : nlights;
+        for (uint r = 0u; r < rounds; ++r) {
+            uint li = r;
+            float n_l;       // expected samples of this light per shading point
+            uint count;      // samples drawn now
+            if (many) {
+                // Pick one light by importance (inverse CDF over the lights).
+                float u = rng_next(rng) * total_importance, acc = 0.0;
+                li = nlights - 1u;
+                for (uint i = 0u; i < nlights; ++i) {
+                    acc += light_importance(get_light(i), sh.p, sh.n);
+                    if (u < acc) { li = i; break; }
+                }
+                n_l = float(n_max) * light_importance(get_light(li), sh.p, sh.n) / total_importance;
+                count = 1u;
+            }
+            GpuLight l = get_light(li);
+            if (!many) {
+                count = light_count_for(l, sh.p, n_max);
+                n_l = float(count);
+            }
+            for (uint j = 0u; j < count; ++j) {
+                LightSample ls = sample_light(l, dome, sh.p, rng_next2(rng));
+                if (!(ls.pdf > 0.0)) continue;
+                vec3 le = light_radiance(l, ls.uv, ls.delta);
+                vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, n_b);
+                // Divide by the expected count n_l (many lights: the selection probability is in it).
+                vec3 c = f * le / (ls.pdf * n_l);
+                result += shadowed(sh, ls.wi, ls.dist, c);
+            }
+        }
+    }
+
+    // BRDF samples: each specular lobe, and the diffuse lobe where it is BRDF-sampled; every light
+    // the direction crosses contributes (the pruning: a sample that hits none traces nothing).
+    if (technique != TECHNIQUE_LIGHT) {
+        uint lobes = min(m.lobe_count, 2u);
+        bool diffuse_brdf = technique == TECHNIQUE_BRDF || diffuse_mis;
+        for (uint k = 0u; k < lobes + 1u; ++k) {
+            bool diffuse = k == lobes;
+            if (diffuse && (!diffuse_brdf || max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) <= 0.0)) continue;
+            for (uint j = 0u; j < n_b; ++j) {
+                vec3 wi, weight;
+                float pdf;
+                bool delta = false;
+                vec2 u = rng_next2(rng);
+                if (diffuse) {
+                    vec3 c = cosine_hemisphere(u);
+                    wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+                    pdf = c.z * INV_PI;
+                    weight = sh.albedo;
+                } else {
+                    BrdfSample bs = brdf_sample(m.lobes[k], sh.n, sh.t, sh.b, sh.v, u);
+                    if (!bs.valid) continue;
+                    wi = bs.wi; weight = bs.weight; pdf = bs.pdf; delta = bs.delta;
+                }
+                if (!(pdf > 0.0) || dot(wi, sh.ng) <= 0.0) continue;
+                for (uint li = 0u; li < nlights; ++li) {
+                    GpuLight l = get_light(li);
+                    LightHit lh = light_hit(l, dome, sh.p, wi);
+                    if (!(lh.pdf > 0.0)) continue;
+                    float w = 1.0;
+                    if (technique == TECHNIQUE_MIS && !delta) {
+                        float n_l = many
+                            ? float(n_max) * light_importance(l, sh.p, sh.n) / total_importance
+                            : float(light_count_for(l, sh.p, n_max));
+                        w = mis_power(float(n_b), pdf, n_l, lh.pdf);
+                    }
+                    vec3 c = weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
+                    result += shadowed(sh, wi, lh.t, c);
+                }
+            }
+        }
+    }
+    return result;
+}
+
+// The shading frame at a surface hit by a ray of direction d.
+Shading shading_at(Surface s, GpuMaterial m, vec3 d) {
+    Shading sh;
+    sh.p = s.p;
+    sh.v = -d;
+    sh.ng = dot(s.ng, d) > 0.0 ? -s.ng : s.ng;
+    sh.n = dot(s.ns, sh.ng) < 0.0 ? -s.ns : s.ns;
+    sh.origin = offset_ray_origin(s.p, sh.ng);
+    // Tangent: the material's direction projected on the tangent plane, else around +Y (so that
+    // anisotropic spheres are brushed along latitudes), else any.
+    vec3 dir = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u ? m.tangent_dir : vec3(0.0, 1.0, 0.0);
+    vec3 t = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u ? dir - sh.n * dot(sh.n, dir) : cross(dir, sh.n);
+    if (dot(t, t) < 1e-8) {
+        vec3 b;
+        make_basis(sh.n, t, b);
+    }
+    sh.t = normalize(t);
+    sh.b = cross(sh.n, sh.t);
+    sh.albedo = m.diffuse * texture_lookup(m.diffuse_texture, s.uv).rgb;
+    return sh;
+}
+
+#endif
