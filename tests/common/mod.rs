@@ -28,7 +28,12 @@ pub fn trace_mode() -> TraceMode {
 pub fn assert_no_validation_messages(ctx: &Context) {
     assert!(ctx.validation_enabled(), "validation layers are not on");
     let m = ctx.validation_messages();
-    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
+    assert!(
+        m.is_empty(),
+        "{} validation message(s):\n{}",
+        m.len(),
+        m.join("\n")
+    );
 }
 
 pub fn scene(json: &str) -> Scene {
@@ -61,4 +66,73 @@ pub fn temp_path(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("illum-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
+}
+
+/// Two-sided normal quantile for a tail probability `alpha` (Acklam's approximation is overkill:
+/// bisection on erfc is enough for tests).
+pub fn z_for(alpha: f64) -> f64 {
+    // P(|Z| > z) = erfc(z / sqrt 2); solve by bisection.
+    let (mut lo, mut hi) = (0.0f64, 40.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if erfc(mid / std::f64::consts::SQRT_2) > alpha {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Complementary error function (Numerical Recipes' erfcc, relative error < 1.2e-7).
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t * (-z * z - 1.26551223
+        + t * (1.00002368
+            + t * (0.37409196
+                + t * (0.09678418
+                    + t * (-0.18628806
+                        + t * (0.27886807
+                            + t * (-1.13520398 + t * (1.48851513 + t * (-0.82215223 + t * 0.17087277)))))))))
+        .exp();
+    if x >= 0.0 { r } else { 2.0 - r }
+}
+
+/// Two-sided quantile of Student's t with `dof` degrees of freedom for tail probability `alpha`
+/// (Cornish-Fisher expansion around the normal quantile): the statistic of a mean divided by its
+/// *estimated* standard error.
+pub fn t_for(alpha: f64, dof: f64) -> f64 {
+    let z = z_for(alpha);
+    let (z3, z5) = (z.powi(3), z.powi(5));
+    z + (z3 + z) / (4.0 * dof) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof)
+}
+
+/// Checks a rendered film of `spp` samples against the per-pixel expectation `expected(i)` (RGB)
+/// with a t-test per pixel and channel, using the Variance AOV, at family-wise significance
+/// `alpha` (Šidák over all tests); and the image mean at the same level. Pixels with zero
+/// variance must match to float rounding.
+pub fn assert_matches_expectation(film: &illum::output::Film, spp: u32, expected: impl Fn(usize) -> [f64; 3], alpha: f64) {
+    let var = film.variance.as_ref().expect("variance AOV");
+    let tests = (film.beauty.len() * 3) as f64;
+    let per = 1.0 - (1.0 - alpha).powf(1.0 / tests);
+    let z = t_for(per, f64::from(spp.max(2) - 1));
+    let (mut sum_d, mut sum_v) = ([0.0f64; 3], [0.0f64; 3]);
+    for (i, p) in film.beauty.iter().enumerate() {
+        let e = expected(i);
+        for c in 0..3 {
+            let d = f64::from(p[c]) - e[c];
+            let v = f64::from(var[i][c]);
+            let tol = z * v.sqrt() + 1e-5 * e[c].abs() + 1e-6;
+            assert!(d.abs() <= tol, "pixel {i} channel {c}: {} vs expected {} (± {tol})", p[c], e[c]);
+            sum_d[c] += d;
+            sum_v[c] += v;
+        }
+    }
+    let n = film.beauty.len() as f64;
+    let zm = z_for(alpha / 3.0);
+    for c in 0..3 {
+        let tol = zm * sum_v[c].sqrt() / n + 1e-6;
+        assert!((sum_d[c] / n).abs() <= tol, "channel {c}: image mean off by {} (± {tol})", sum_d[c] / n);
+    }
 }
