@@ -31,6 +31,67 @@ enum Command {
     /// Benchmarks: figures to read, not tests.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Render a scene with several techniques for the same time and compare their error.
+    Compare(CompareArgs),
+}
+
+/// Sample counts and the direct-lighting technique.
+#[derive(clap::Args, Clone)]
+struct IntegratorArgs {
+    /// Direct lighting by BRDF sampling, light sampling, or both with MIS.
+    #[arg(long, default_value = "mis")]
+    technique: illum::render::Technique,
+    /// Most light samples per light (each light takes its solid-angle share of these, at least 1).
+    #[arg(long, default_value_t = 4)]
+    light_samples: u32,
+    /// BRDF samples per lobe.
+    #[arg(long, default_value_t = 2)]
+    brdf_samples: u32,
+    /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
+    #[arg(long)]
+    diffuse_mis: bool,
+}
+
+impl IntegratorArgs {
+    fn settings(&self, technique: illum::render::Technique) -> illum::render::IntegratorSettings {
+        illum::render::IntegratorSettings {
+            technique,
+            light_samples: self.light_samples,
+            brdf_samples: self.brdf_samples,
+            diffuse_mis: self.diffuse_mis,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// Scene file (.json); omit it to compare on the default scene.
+    scene: Option<PathBuf>,
+    /// Techniques to compare, comma separated (brdf, light, mis).
+    #[arg(long, default_value = "brdf,light,mis", value_delimiter = ',')]
+    techniques: Vec<illum::render::Technique>,
+    /// Seconds of rendering per technique.
+    #[arg(long, default_value_t = 5.0)]
+    time: f64,
+    /// Reference image (EXR, same resolution); without one, the half-buffer estimate is used.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Prefix of the outputs: PREFIX-error.png (curves), PREFIX-strip.png (images and error maps),
+    /// PREFIX-<technique>.exr.
+    #[arg(short, long, default_value = "compare")]
+    output: PathBuf,
+    #[arg(long)]
+    width: Option<u32>,
+    #[arg(long)]
+    height: Option<u32>,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    #[arg(long)]
+    device: Option<String>,
+    #[arg(long, default_value = "auto")]
+    trace: TraceMode,
+    #[command(flatten)]
+    integrator: IntegratorArgs,
 }
 
 #[derive(clap::Args)]
@@ -78,6 +139,8 @@ struct RenderArgs {
     /// Enable the Vulkan validation layers.
     #[arg(long)]
     validate: bool,
+    #[command(flatten)]
+    integrator: IntegratorArgs,
 }
 
 fn main() {
@@ -91,6 +154,7 @@ fn run() -> Result<()> {
     match Cli::parse().command {
         Command::Render(a) => render(a),
         Command::Devices => devices(),
+        Command::Compare(a) => compare(a),
         Command::Bench(BenchCommand::Trace(a)) => bench_trace(a),
         Command::Schema => {
             println!(
@@ -127,12 +191,12 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
-fn render(a: RenderArgs) -> Result<()> {
-    let mut scene = match &a.scene {
+fn load_scene(path: Option<&Path>, width: Option<u32>, height: Option<u32>) -> Result<illum::scene::Scene> {
+    let mut scene = match path {
         Some(p) => illum::scene::load(p)?,
         None => illum::scene::default_scene(),
     };
-    match (a.width, a.height) {
+    match (width, height) {
         (Some(w), Some(h)) => (scene.camera.width, scene.camera.height) = (w, h),
         (Some(w), None) => {
             let aspect = f64::from(scene.camera.height) / f64::from(scene.camera.width);
@@ -149,6 +213,169 @@ fn render(a: RenderArgs) -> Result<()> {
     if scene.camera.width == 0 || scene.camera.height == 0 {
         bail!("--width and --height must be at least 1");
     }
+    Ok(scene)
+}
+
+fn read_reference(path: &Path, scene: &illum::scene::Scene) -> Result<Vec<[f32; 3]>> {
+    let img = illum::output::read_exr(path)?;
+    if (img.width, img.height) != (scene.camera.width, scene.camera.height) {
+        bail!(
+            "--reference {}: it is {}x{}, the render {}x{}",
+            path.display(),
+            img.width,
+            img.height,
+            scene.camera.width,
+            scene.camera.height
+        );
+    }
+    Ok(img.rgb()?)
+}
+
+fn compare(a: CompareArgs) -> Result<()> {
+    let scene = load_scene(a.scene.as_deref(), a.width, a.height)?;
+    if a.techniques.is_empty() {
+        bail!("--techniques: name at least one of brdf, light, mis");
+    }
+    let reference = a
+        .reference
+        .as_deref()
+        .map(|p| read_reference(p, &scene))
+        .transpose()?;
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: false,
+    })?;
+    let renderer = Renderer::new(ctx.clone());
+    let mut rows = Vec::new();
+    for &t in &a.techniques {
+        let settings = RenderSettings {
+            integrator: a.integrator.settings(t),
+            spp: 1 << 20,
+            time: Some(a.time),
+            seed: a.seed,
+            trace: a.trace,
+            reference: reference.clone(),
+            evaluate_passes: true,
+            ..Default::default()
+        };
+        eprintln!("illum compare: {} for {} s ...", t.name(), a.time);
+        let out = renderer.render(&scene, &settings, &mut |_, _| {})?;
+        let exr = PathBuf::from(format!("{}-{}.exr", a.output.display(), t.name()));
+        let meta = ImageMetadata {
+            spp: out.stats.spp,
+            render_seconds: out.stats.render_seconds,
+            device: ctx.info().name.clone(),
+            seed: a.seed,
+            extra: vec![("illum.technique".into(), t.name().into())],
+        };
+        write(&exr, |p| write_exr(p, &out.film, &meta))?;
+        rows.push((t, out));
+    }
+    let measured = reference.is_some();
+    let error_of = |p: &illum::render::PassReport| {
+        if measured {
+            p.error.map(|e| e.relmse)
+        } else {
+            p.estimated_relmse
+        }
+    };
+    println!(
+        "{:<10} {:>8} {:>10} {:>14} {:>14}",
+        "technique",
+        "spp",
+        "seconds",
+        if measured { "relMSE" } else { "est. relMSE" },
+        "efficiency"
+    );
+    let mut series = Vec::new();
+    for (t, out) in &rows {
+        let last = out.passes.last().cloned().unwrap_or_default();
+        let err = error_of(&last).unwrap_or(f64::NAN);
+        println!(
+            "{:<10} {:>8} {:>10.3} {:>14.4e} {:>14.4e}",
+            t.name(),
+            last.spp,
+            last.wall_seconds,
+            err,
+            1.0 / (err * last.wall_seconds)
+        );
+        series.push(illum::report::Series {
+            name: t.name().to_string(),
+            points: out
+                .passes
+                .iter()
+                .filter_map(|p| Some((p.wall_seconds, error_of(p)?)))
+                .collect(),
+        });
+    }
+    if !measured {
+        println!(
+            "(no --reference: relMSE estimated from the even/odd half-buffers; the estimate cannot see bias)"
+        );
+    }
+    let plot = PathBuf::from(format!("{}-error.png", a.output.display()));
+    illum::report::plot_error(
+        &plot,
+        &format!("{:.1} s per technique", a.time),
+        if measured {
+            "relMSE"
+        } else {
+            "estimated relMSE (half-buffers)"
+        },
+        &series,
+    )?;
+    let maps: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|(_, out)| match &reference {
+            Some(r) => illum::report::relative_error_map(&out.film.beauty, r),
+            None => {
+                // Per-pixel variance of the mean over the squared pixel value: the half-buffer
+                // view of the same error, from the Variance AOV.
+                let var = out.film.variance.as_ref();
+                out.film
+                    .beauty
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        (0..3)
+                            .map(|c| {
+                                let v = var.map_or(0.0, |v| f64::from(v[i][c]));
+                                v / (f64::from(p[c]).powi(2) + illum::metrics::RELMSE_EPSILON)
+                            })
+                            .sum::<f64>()
+                            / 3.0
+                    })
+                    .collect()
+            }
+        })
+        .collect();
+    let panels: Vec<illum::report::Panel> = rows
+        .iter()
+        .zip(maps)
+        .map(|((t, out), error)| illum::report::Panel {
+            label: format!(
+                "{} {}spp {:.1e}",
+                t.name(),
+                out.stats.spp,
+                out.passes.last().and_then(error_of).unwrap_or(f64::NAN)
+            ),
+            film: &out.film,
+            error,
+        })
+        .collect();
+    let strip = PathBuf::from(format!("{}-strip.png", a.output.display()));
+    illum::report::image_strip(&strip, &panels)?;
+    eprintln!(
+        "illum compare: wrote {}, {} and {}-<technique>.exr",
+        plot.display(),
+        strip.display(),
+        a.output.display()
+    );
+    Ok(())
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let scene = load_scene(a.scene.as_deref(), a.width, a.height)?;
     let ext = a
         .output
         .extension()
@@ -169,29 +396,18 @@ fn render(a: RenderArgs) -> Result<()> {
         validation: a.validate,
     })?;
     let renderer = Renderer::new(ctx.clone());
-    let reference = match &a.reference {
-        Some(p) => {
-            let img = illum::output::read_exr(p)?;
-            if (img.width, img.height) != (scene.camera.width, scene.camera.height) {
-                bail!(
-                    "--reference {}: it is {}x{}, the render {}x{}",
-                    p.display(),
-                    img.width,
-                    img.height,
-                    scene.camera.width,
-                    scene.camera.height
-                );
-            }
-            Some(img.rgb()?)
-        }
-        None => None,
-    };
+    let reference = a
+        .reference
+        .as_deref()
+        .map(|p| read_reference(p, &scene))
+        .transpose()?;
     let spp = match (a.spp, a.time) {
         (Some(n), _) => n,
         (None, Some(_)) => 1 << 20,
         (None, None) => 16,
     };
     let settings = RenderSettings {
+        integrator: a.integrator.settings(a.integrator.technique),
         spp,
         time: a.time,
         seed: a.seed,
@@ -398,7 +614,7 @@ fn bench_trace(a: BenchTraceArgs) -> Result<()> {
         a.rays
     );
     println!(
-        "{:>9} {:>9} | {:>8} {:>9} {:>9} | {:>9} {:>11} {:>12} | {:>7} {:>7}",
+        "{:>9} {:>8} | {:>8} {:>8} {:>8} | {:>13} {:>13} {:>13} | {:>5} {:>5}",
         "triangles",
         "path",
         "build ms",
@@ -407,9 +623,13 @@ fn bench_trace(a: BenchTraceArgs) -> Result<()> {
         "primary",
         "bounce any",
         "bounce close",
-        "hit %",
-        "bnc %"
+        "hit%",
+        "bnc%"
     );
+    let rate = |r: bench::Rate| match r.cpu {
+        Some(c) => format!("{:.3} ({:.3})", r.wall, c),
+        None => format!("{:.3}", r.wall),
+    };
     bench::run(
         &ctx,
         &bench::BenchOptions {
@@ -419,21 +639,24 @@ fn bench_trace(a: BenchTraceArgs) -> Result<()> {
         },
         &mut |r| {
             println!(
-                "{:>9} {:>9} | {:>8.1} {:>9.2} {:>9.2} | {:>9.3} {:>11.3} {:>12.3} | {:>7.1} {:>7.1}",
+                "{:>9} {:>8} | {:>8.1} {:>8.2} {:>8.2} | {:>13} {:>13} {:>13} | {:>5.1} {:>5.1}",
                 r.triangles,
                 r.path,
                 r.build.seconds() * 1e3,
                 r.build.blas_bytes as f64 / 1048576.0,
                 r.build.tlas_bytes as f64 / 1024.0,
-                r.primary,
-                r.bounce_any,
-                r.bounce_closest,
+                rate(r.primary),
+                rate(r.bounce_any),
+                rate(r.bounce_closest),
                 r.primary_hits * 100.0,
                 r.bounce_hits * 100.0
             )
         },
     )?;
-    println!("(ray figures in Mrays/s; bounce rays: cosine-distributed from the first hits)");
+    println!(
+        "Mrays per second of wall time (and per CPU-second of this process, which other load on \
+         the machine disturbs less); bounce rays: cosine-distributed from the first hits"
+    );
     let msgs = ctx.validation_messages();
     if !msgs.is_empty() {
         bail!("{} Vulkan validation message(s) (see above)", msgs.len());
