@@ -21,6 +21,7 @@ void main() {
         vec2 ndc = 2.0 * film_uv - 1.0;
         vec3 d = normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz - ndc.y * frame.cam_up.xyz);
         Hit h = trace_closest(vec3(0.0), d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
+        g_rays += 1u;
         vec3 beauty = vec3(0.0);
         if (h.kind == HIT_NONE) {
             beauty = dome_radiance(d);
@@ -48,5 +49,6 @@ void main() {
         acc.beauty_sq.rgb += beauty * beauty;
         if (((pc.first_sample + k) & 1u) == 1u) acc.beauty_odd.rgb += beauty;
     }
+    acc.beauty_sq.w += float(g_rays);
     film[pixel] = acc;
 }

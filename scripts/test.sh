@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it: formatting and lints, then every test on lavapipe with the
-# Vulkan validation layers on (the tests enable them; any message fails the test).
+# Vulkan validation layers on (the tests enable them; any message fails the test), on each trace
+# path and on a driver without ray queries.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
@@ -8,5 +9,13 @@ export CARGO_TERM_COLOR=never
 cargo fmt --all -- --check
 cargo clippy --release --all-targets -- -D warnings
 
-# Mesa 25 lavapipe from bookworm-backports (ray queries), default trace path.
+echo "== Mesa 25 lavapipe (bookworm-backports), trace path auto"
 cargo test --release
+
+echo "== Mesa 25 lavapipe, the other trace paths forced"
+ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --test report
+ILLUM_TEST_TRACE=bvh cargo test --release --test render --test direct --test report --test cli
+
+echo "== Debian's stock Mesa 22.3.6 lavapipe: no VK_KHR_ray_query, so the compute BVH"
+stock="$PWD/.vk/mesa-stock/icd.json"
+VK_DRIVER_FILES="$stock" VK_ICD_FILENAMES="$stock" cargo test --release

@@ -515,7 +515,7 @@ fn render(a: RenderArgs) -> Result<()> {
         eprintln!(
             "illum: {}x{} at {} spp in {:.2} s on {} via {}: upload {:.3} s, structure build {:.3} s \
              ({} triangles; BLAS {:.1} MiB after compaction from {:.1}, TLAS {:.2} MiB), render {:.2} s \
-             ({:.2} M camera samples/s); {} non-finite samples; wrote {}{}",
+             ({:.2} M camera samples/s, {:.2} M rays/s, {:.2} rays per sample); {} non-finite samples; wrote {}{}",
             scene.camera.width,
             scene.camera.height,
             out.stats.spp,
@@ -530,6 +530,8 @@ fn render(a: RenderArgs) -> Result<()> {
             b.tlas_bytes as f64 / 1048576.0,
             s.render_seconds,
             samples / s.render_seconds / 1e6,
+            s.rays as f64 / s.render_seconds / 1e6,
+            s.rays as f64 / samples,
             s.non_finite_samples,
             exr_path.display(),
             png_path

@@ -112,9 +112,13 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
     return sum;
 }
 
+// Rays traced by this invocation (for the rays-per-second figures).
+uint g_rays = 0u;
+
 // Adds c if the segment from the shading point along w up to `dist` is unoccluded.
 vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
     if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
+    g_rays += 1u;
     float tmax = dist == INF ? INF : dist * (1.0 - 1e-4);
     return trace_occluded(sh.origin, w, 0.0, tmax, MASK_GEOMETRY) ? vec3(0.0) : c;
 }

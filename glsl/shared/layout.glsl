@@ -217,7 +217,7 @@ struct GpuTexture {
 // Accumulated per pixel over all samples so far (sums, divided by the sample count on readback).
 struct FilmPixel {
     vec4 beauty;     // rgb sum
-    vec4 beauty_sq;  // rgb sum of squares (for the variance of the mean)
+    vec4 beauty_sq;  // rgb sum of squares (for the variance of the mean); w = rays traced
     vec4 albedo;     // rgb sum over samples that hit a surface; w = number of such samples
     vec4 normal;     // xyz sum of shading normals; w = sum of hit distances
     vec4 emission;   // rgb sum of directly seen emission; w = samples with non-finite beauty

@@ -13,9 +13,17 @@ pub struct Resolved {
     pub even: Vec<[f32; 3]>,
     pub odd: Vec<[f32; 3]>,
     pub non_finite_samples: u64,
+    /// Rays traced (camera and shadow rays).
+    pub rays: u64,
 }
 
-pub fn download_and_resolve(ctx: &Context, film: &Buffer, w: u32, h: u32, spp: u32) -> Result<Resolved> {
+pub fn download_and_resolve(
+    ctx: &Context,
+    film: &Buffer,
+    w: u32,
+    h: u32,
+    spp: u32,
+) -> Result<Resolved> {
     let raw: Vec<FilmPixel> = ctx.download(film, w as usize * h as usize)?;
     Ok(resolve(&raw, w, h, spp))
 }
@@ -32,6 +40,7 @@ pub fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> Resolved {
     let mut even = vec![[0.0f32; 3]; raw.len()];
     let mut odd = vec![[0.0f32; 3]; raw.len()];
     let mut non_finite = 0u64;
+    let mut rays = 0u64;
     for (i, p) in raw.iter().enumerate() {
         for c in 0..3 {
             let sum = f64::from(p.beauty[c]);
@@ -50,8 +59,13 @@ pub fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> Resolved {
             }
         }
         let hits = p.albedo[3];
-        film.depth[i] = if hits > 0.0 { p.normal[3] / hits } else { f32::INFINITY };
+        film.depth[i] = if hits > 0.0 {
+            p.normal[3] / hits
+        } else {
+            f32::INFINITY
+        };
         non_finite += p.emission[3] as u64;
+        rays += p.beauty_sq[3] as u64;
     }
     film.variance = Some(variance);
     Resolved {
@@ -60,5 +74,6 @@ pub fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> Resolved {
         even,
         odd,
         non_finite_samples: non_finite,
+        rays,
     }
 }

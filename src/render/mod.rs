@@ -145,6 +145,8 @@ pub struct RenderStats {
     pub spp: u32,
     /// Camera samples whose beauty was NaN or infinite (counted, then replaced by 0).
     pub non_finite_samples: u64,
+    /// Rays traced: camera rays and shadow rays.
+    pub rays: u64,
     pub trace: &'static str,
 }
 
@@ -340,6 +342,7 @@ impl Renderer {
                 total_seconds: t0.elapsed().as_secs_f64(),
                 spp: done,
                 non_finite_samples: resolved.non_finite_samples,
+                rays: resolved.rays,
                 trace: trace.name(),
             },
             film: resolved.film,
