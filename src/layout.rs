@@ -27,6 +27,9 @@ pub struct Frame {
     pub textures: u64,
     pub texels: u64,
     pub dome_sampling: u64,
+    pub light_nodes: u64,
+    pub light_refs: u64,
+    pub light_bvh: [u32; 4],
 }
 
 #[repr(C)]
@@ -121,6 +124,15 @@ pub struct GpuDomeSampling {
     pub height: u32,
     pub integral: f32,
     pub pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuLightNode {
+    pub lo: [f32; 3],
+    pub index: u32,
+    pub hi: [f32; 3],
+    pub count: u32,
 }
 
 #[repr(C)]
@@ -246,7 +258,10 @@ pub fn reflection() -> Vec<StructLayout> {
             lights,
             textures,
             texels,
-            dome_sampling
+            dome_sampling,
+            light_nodes,
+            light_refs,
+            light_bvh
         }),
         describe!(PassConstants {
             first_sample,
@@ -317,6 +332,12 @@ pub fn reflection() -> Vec<StructLayout> {
             height,
             integral,
             pad
+        }),
+        describe!(GpuLightNode {
+            lo,
+            index,
+            hi,
+            count
         }),
         describe!(GpuTexture {
             offset,

@@ -212,3 +212,35 @@ fn an_emissive_quad_and_a_rect_light_of_the_same_radiance_give_the_same_image() 
     let b = render_technique(&quad, 48, Technique::Mis, 22);
     assert_same_image(&a.film, &b.film, 48, "rect light vs emissive quad");
 }
+
+/// Above 8 lights the integrator picks lights by importance and BRDF samples find lights through
+/// the light BVH: MIS must still agree with light sampling alone. 12 sphere lights and a small
+/// emissive mesh (two triangle lights) over a glossy floor.
+#[test]
+fn many_lights_through_the_light_bvh_agree_with_light_sampling() {
+    let mut lights = Vec::new();
+    for i in 0..12 {
+        let (x, z) = (f64::from(i % 4) - 1.5, f64::from(i / 4) - 1.0);
+        lights.push(format!(
+            r#""l{i}": {{"sphere": {{"center": [{x}, 1.2, {z}]"radius": 0.2}}, "intensity": {}, "color": [1, {}, 0.8]}}"#,
+            2.0 + f64::from(i % 3),
+            0.5 + 0.04 * f64::from(i)
+        ).replace("]\"radius", "], \"radius"));
+    }
+    let json = format!(
+        r#"{{"camera": {{"position": [0, 2.5, 3.5], "look_at": [0, 0, 0], "fov_y": 45, "resolution": [20, 16]}},
+            "materials": {{"floor": {{"diffuse": [0.4, 0.4, 0.4], "specular": [{{"model": "ggx", "roughness": 0.35}}]}},
+                           "glow": {{"diffuse": [0, 0, 0], "emission": [3, 3, 3]}}}},
+            "shapes": {{"f": {{"rect": {{"center": [0, 0, 0], "normal": [0, 1, 0], "size": [5, 5]}}, "material": "floor"}},
+                        "tri": {{"mesh": {{"positions": [[-0.5, 0.8, 1.2], [0.5, 0.8, 1.2], [0.5, 0.8, 1.8], [-0.5, 0.8, 1.8]],
+                                           "indices": [0, 1, 2, 0, 2, 3]}}, "material": "glow"}}}},
+            "lights": {{{}}}}}"#,
+        lights.join(",")
+    );
+    let mis = render_technique(&json, 96, Technique::Mis, 31);
+    let light = render_technique(&json, 96, Technique::Light, 32);
+    assert_eq!(mis.stats.non_finite_samples + light.stats.non_finite_samples, 0);
+    assert_same_image(&mis.film, &light.film, 96, "many lights: mis vs light");
+    // The lights are seen: the image is not black.
+    assert!(mis.film.beauty.iter().map(|p| p[0]).sum::<f32>() > 1.0);
+}

@@ -16,7 +16,9 @@
 // * Lights along a ray: every light a BRDF sample crosses counts, and light surfaces do not occlude
 //   (shadow rays see MASK_GEOMETRY only); emissive geometry is geometry and occludes. Both
 //   techniques use the same shadow rays, so the MIS weights sum to one.
-// * Finding the lights a BRDF sample hits is a loop over the lights (light_hit), O(lights).
+// * A BRDF sample finds the finite lights it crosses by traversing the light BVH (a tree over their
+//   bounds, src/render/lights.rs); the infinite lights (dome, sun) are always tested. At most
+//   DIRECT_MAX_CROSSED lights along one direction are counted.
 #ifndef ILLUM_DIRECT_GLSL
 #define ILLUM_DIRECT_GLSL
 
@@ -26,6 +28,47 @@
 #include "mis.glsl"
 
 #define DIRECT_LOOP_LIGHTS 8u
+#define DIRECT_MAX_CROSSED 16u
+#define LIGHT_BVH_STACK 32u
+
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer LightNodeRef { GpuLightNode v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer LightRefRef { uint v[]; };
+
+bool ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi) {
+    vec3 t0 = (lo - o) * inv_d, t1 = (hi - o) * inv_d;
+    vec3 tn = min(t0, t1), tf = max(t0, t1);
+    float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float leave = min(min(tf.x, tf.y), tf.z);
+    return enter <= leave * 1.00001;
+}
+
+// The lights whose bounds the ray from p along w crosses (candidates for light_hit), then the
+// infinite lights. Returns the count written to `ids`.
+uint lights_along(vec3 p, vec3 w, out uint ids[DIRECT_MAX_CROSSED]) {
+    uint n = 0u;
+    LightRefRef refs = LightRefRef(frame.light_refs);
+    if (frame.light_bvh.x > 0u) {
+        LightNodeRef nodes = LightNodeRef(frame.light_nodes);
+        vec3 inv_d = 1.0 / w;
+        uint stack[LIGHT_BVH_STACK];
+        uint sp = 0u;
+        stack[sp++] = 0u;
+        while (sp > 0u && n < DIRECT_MAX_CROSSED) {
+            GpuLightNode node = nodes.v[stack[--sp]];
+            if (!ray_box(p, inv_d, node.lo, node.hi)) continue;
+            if (node.count == 0u) {
+                if (sp + 2u <= LIGHT_BVH_STACK) {
+                    stack[sp++] = node.index;
+                    stack[sp++] = node.index + 1u;
+                }
+            } else {
+                for (uint k = 0u; k < node.count && n < DIRECT_MAX_CROSSED; ++k) ids[n++] = refs.v[node.index + k];
+            }
+        }
+    }
+    for (uint k = 0u; k < frame.light_bvh.z && n < DIRECT_MAX_CROSSED; ++k) ids[n++] = refs.v[frame.light_bvh.y + k];
+    return n;
+}
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeSamplingRef { GpuDomeSampling v; };
 
@@ -197,8 +240,10 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                     wi = bs.wi; weight = bs.weight; pdf = bs.pdf; delta = bs.delta;
                 }
                 if (!(pdf > 0.0) || dot(wi, sh.ng) <= 0.0) continue;
-                for (uint li = 0u; li < nlights; ++li) {
-                    GpuLight l = get_light(li);
+                uint ids[DIRECT_MAX_CROSSED];
+                uint crossed = lights_along(sh.p, wi, ids);
+                for (uint q = 0u; q < crossed; ++q) {
+                    GpuLight l = get_light(ids[q]);
                     LightHit lh = light_hit(l, dome, sh.p, wi);
                     if (!(lh.pdf > 0.0)) continue;
                     float w = 1.0;

@@ -115,6 +115,9 @@ struct Frame {
     uint64_t textures;
     uint64_t texels;
     uint64_t dome_sampling;   // GpuDomeSampling of the dome's map (0: none; uniform sampling)
+    uint64_t light_nodes;     // GpuLightNode array: BVH over the finite lights' bounds
+    uint64_t light_refs;      // uint array: light indices in leaf order, then the infinite lights
+    uvec4 light_bvh;          // node count, first infinite ref, infinite light count, unused
 };
 
 // Per-dispatch constants.
@@ -205,6 +208,16 @@ struct GpuDomeSampling {
     uint height;
     float integral;        // mean texel weight (sum / (width height)), for diagnostics
     uint pad;
+};
+
+// A node of the light BVH (src/render/lights.rs): BRDF samples find the finite lights they cross
+// by traversing it instead of testing every light. count == 0: inner node with children `index`
+// and `index + 1`; else a leaf of light_refs[index .. index + count].
+struct GpuLightNode {
+    vec3 lo;
+    uint index;
+    vec3 hi;
+    uint count;
 };
 
 struct GpuTexture {

@@ -8,6 +8,7 @@
 
 pub mod dome;
 mod film;
+mod lights;
 mod primary;
 mod upload;
 

@@ -437,6 +437,10 @@ impl GpuScene {
         let texture_buffer = upload(ctx, "textures", &textures, storage)?;
         let texel_buffer = upload(ctx, "texels", &texels, storage)?;
 
+        // The light BVH that BRDF samples traverse to find the lights they cross.
+        let light_bvh = super::lights::build(&lights);
+        let light_node_buffer = upload(ctx, "light BVH nodes", &light_bvh.nodes, storage)?;
+        let light_ref_buffer = upload(ctx, "light BVH references", &light_bvh.refs, storage)?;
         // Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
         let mut dome_table = None;
         let mut dome_sampling = None;
@@ -487,6 +491,14 @@ impl GpuScene {
             textures: addr(&texture_buffer),
             texels: addr(&texel_buffer),
             dome_sampling: addr(&dome_sampling),
+            light_nodes: addr(&light_node_buffer),
+            light_refs: addr(&light_ref_buffer),
+            light_bvh: [
+                light_bvh.nodes.len() as u32,
+                light_bvh.infinite_first,
+                light_bvh.infinite_count,
+                0,
+            ],
         };
         Ok(GpuScene {
             frame,
@@ -511,6 +523,8 @@ impl GpuScene {
                 texel_buffer,
                 dome_table,
                 dome_sampling,
+                light_node_buffer,
+                light_ref_buffer,
             ]
             .into_iter()
             .flatten()
