@@ -53,14 +53,49 @@ vec2 concentric_disk(vec2 u) {
     return r * vec2(cos(phi), sin(phi));
 }
 
+// Inverse trigonometry with float32 accuracy (a few ulp; Cephes atanf's polynomial after reduction
+// to |x| <= tan(pi/8)). Vulkan allows atan/asin/acos 4096 ULP and drivers use it: lavapipe's atan
+// has 2e-5 relative error and its acos 1.6e-4 absolute (glsl/tests/trig_check.comp), which shows in
+// solid angles, texel lookups and the irradiance formulas. sin and cos are accurate in practice.
+float atan_unit_interval(float x) {   // x in [0, 1]
+    float base = 0.0;
+    if (x > 0.41421356) {
+        base = 0.25 * PI;
+        x = (x - 1.0) / (x + 1.0);
+    }
+    float z = x * x;
+    return base + ((((8.05374449538e-2 * z - 1.38776856032e-1) * z + 1.99777106478e-1) * z - 3.33329491539e-1) * z * x + x);
+}
+
+// atan(y, x) in [-pi, pi]; 0 for (0, 0).
+float atan2_accurate(float y, float x) {
+    float ax = abs(x), ay = abs(y);
+    float hi = max(ax, ay), lo = min(ax, ay);
+    if (hi == 0.0) return 0.0;
+    float r = atan_unit_interval(lo / hi);
+    if (ay > ax) r = 0.5 * PI - r;
+    if (x < 0.0) r = PI - r;
+    return y < 0.0 ? -r : r;
+}
+
+float acos_accurate(float x) {
+    x = clamp(x, -1.0, 1.0);
+    return atan2_accurate(sqrt(max(0.0, (1.0 - x) * (1.0 + x))), x);
+}
+
+float asin_accurate(float x) {
+    x = clamp(x, -1.0, 1.0);
+    return atan2_accurate(x, sqrt(max(0.0, (1.0 - x) * (1.0 + x))));
+}
+
 // Equirectangular (lat-long) map of directions, as the dome and the sphere's surface uv use it:
 // the direction is first rotated about +Y by the angle whose (cos, sin) is rot_cos_sin; then
 // u = longitude / (2 pi) + 1/2 with longitude atan(r.x, -r.z), v = theta / pi with theta measured
 // from +Y (v = 0 at +Y, the top row of the image).
 vec2 direction_to_latlong(vec3 d, vec2 rot_cos_sin) {
     vec3 r = vec3(rot_cos_sin.x * d.x - rot_cos_sin.y * d.z, d.y, rot_cos_sin.y * d.x + rot_cos_sin.x * d.z);
-    float phi = atan(r.x, -r.z);
-    float theta = acos(clamp(r.y, -1.0, 1.0));
+    float phi = atan2_accurate(r.x, -r.z);
+    float theta = atan2_accurate(length(r.xz), r.y);
     return vec2(phi * (0.5 * INV_PI) + 0.5, theta * INV_PI);
 }
 

@@ -34,13 +34,26 @@ const int IRR_DISK_SIDES = 32;
 
 // E / L of a uniform spherical cap of angular radius sigma (sin^2 sigma = s2, cos sigma = cs >= 0)
 // whose centre makes cos(theta) = ct with the normal; exact, including the horizon crossing.
+// Snyder's crossing term (ct acos(y) - x z) s2 + atan(z / x), x = cot(sigma), cancels badly for small
+// caps (the sun: atan(z/x) and x z s2 agree to 1 part in 1e4), so it is evaluated as
+// ct acos(y) s2 + u s2 + (atan(u) - u) with u = z / x, using x z s2 = u - u s2 exactly and a series
+// for atan(u) - u at small u.
 float irradiance_cap(float ct, float s2, float cs) {
     if (ct * ct >= s2) return PI * s2 * max(ct, 0.0);   // entirely above or below the horizon
     float st = sqrt(max(1.0 - ct * ct, 1e-12));
     float x = cs * inversesqrt(s2);                     // cot(sigma)
     float y = clamp(-x * ct / st, -1.0, 1.0);
-    float z = st * sqrt(max(0.0, 1.0 - y * y));
-    return max(0.0, (ct * acos(y) - x * z) * s2 + atan(z, x));
+    float z = st * sqrt(max(0.0, (1.0 - y) * (1.0 + y)));
+    if (cs < 1e-3) return max(0.0, (ct * acos_accurate(y) - x * z) * s2 + atan2_accurate(z, x));
+    float u = z / x;
+    float d;   // atan(u) - u
+    if (u < 0.3) {
+        float u2 = u * u;
+        d = u * u2 * (-1.0 / 3.0 + u2 * (1.0 / 5.0 + u2 * (-1.0 / 7.0 + u2 * (1.0 / 9.0 + u2 * (-1.0 / 11.0 + u2 * (1.0 / 13.0 - u2 / 15.0))))));
+    } else {
+        d = atan2_accurate(z, x) - u;
+    }
+    return max(0.0, ct * acos_accurate(y) * s2 + u * s2 + d);
 }
 
 float irradiance_sphere(vec3 p, vec3 n, vec3 c, float r, bool two_sided) {

@@ -8,9 +8,10 @@
 //   it contributes 0 and still counts in the light's sample count N_L.
 // * One-sided emitters (rect, disk, triangle, sphere seen from inside) emit toward their normal only,
 //   unless LIGHT_FLAG_TWO_SIDED: from behind, sample_*() returns no sample and light_pdf() is 0.
-// * Directions exactly on an emitter's silhouette are accepted with a relative margin of ~1e-5
-//   (edges, rims, cone boundaries), so that float rounding never makes pdf() 0 for a direction
-//   the sampler produced. The extra support has relative measure ~1e-5.
+// * Directions on an emitter's silhouette (edges, rims, cone boundaries) are accepted with a margin
+//   of 1e-5 of the emitter's size plus ~2 ulp of the hit distance, so that float rounding never
+//   makes pdf() 0 for a direction the sampler produced. The extra support has relative measure
+//   ~1e-5 (the emitter's own radiance lookup decides whether such a ray hits).
 // * LightSample.n is the emitter's geometric normal at x (not flipped toward p); the emitted side
 //   is the one with dot(n, -wi) > 0. LightSample.uv follows glsl/shared/surface.glsl's uv of the
 //   light's shape (rect: (0,0) at centre - u/2 - v/2; disk: 0.5 + local xy / (2R); sphere: lat-long
@@ -68,6 +69,14 @@ struct LightHit {
 };
 
 const float LIGHT_EDGE_MARGIN = 1e-5;      // relative silhouette margin (see the header)
+const float LIGHT_POSITION_ULPS = 2.5e-7;  // float32 error of a point at distance t: ~2 ulp of t
+
+// Whether unit w lies in the cone of 1 - cos(theta_max) = om about unit z: |w - z|^2 = 2 (1 - cos)
+// (no cancellation), with the relative margin and ~2 ulp of direction error.
+bool in_cone(vec3 w, vec3 z, float om) {
+    vec3 wz = w - z;
+    return dot(wz, wz) <= 2.0 * om * (1.0 + LIGHT_EDGE_MARGIN) + 4.0 * LIGHT_POSITION_ULPS * sqrt(2.0 * om);
+}
 const float RECT_OMEGA_MIN = 1e-3;         // solid-angle sampling range of rects (TECHNIQUES 2.1)
 const float RECT_OMEGA_MAX = 6.22;
 
@@ -123,7 +132,7 @@ float vos_triangle(vec3 a, vec3 b, vec3 c, float triple) {
     float den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
     float num = abs(triple);
     if (num == 0.0) return 0.0;
-    return 2.0 * atan(num, den);
+    return 2.0 * atan2_accurate(num, den);
 }
 
 // Solid angle of the rect with corner s and full edges ex, ey, seen from p.
@@ -163,10 +172,10 @@ LightSample sample_rect(GpuLight l, vec3 p, vec2 u) {
     vec3 n1 = normalize(vec3(-z0, 0.0, x1));
     vec3 n2 = normalize(vec3(0.0, -z0, y1));
     vec3 n3 = normalize(vec3(z0, 0.0, -x0));
-    float g0 = acos(clamp(-dot(n0, n1), -1.0, 1.0));
-    float g1 = acos(clamp(-dot(n1, n2), -1.0, 1.0));
-    float g2 = acos(clamp(-dot(n2, n3), -1.0, 1.0));
-    float g3 = acos(clamp(-dot(n3, n0), -1.0, 1.0));
+    float g0 = acos_accurate(-dot(n0, n1));
+    float g1 = acos_accurate(-dot(n1, n2));
+    float g2 = acos_accurate(-dot(n2, n3));
+    float g3 = acos_accurate(-dot(n3, n0));
     float b0 = n0.z, b1 = n2.z;
     float k = 2.0 * PI - g2 - g3;
     float S = g0 + g1 - k;
@@ -210,7 +219,8 @@ LightHit rect_hit(GpuLight l, vec3 p, vec3 w) {
     if (!(t > 0.0)) return h;
     vec3 q = t * w - pc;
     vec2 a = vec2(dot(q, eu) / dot(eu, eu), dot(q, ev) / dot(ev, ev));
-    if (any(greaterThan(abs(a), vec2(0.5 + LIGHT_EDGE_MARGIN)))) return h;
+    vec2 margin = LIGHT_EDGE_MARGIN + LIGHT_POSITION_ULPS * t * inversesqrt(vec2(dot(eu, eu), dot(ev, ev)));
+    if (any(greaterThan(abs(a), 0.5 + margin))) return h;
     h.t = t;
     h.n = N / area;
     h.uv = clamp(a + 0.5, 0.0, 1.0);
@@ -285,9 +295,7 @@ LightHit sphere_hit(GpuLight l, vec3 p, vec3 w) {
     float om = s2max / (1.0 + cmax);
     float dl = sqrt(d2);
     vec3 z = dc / dl;
-    vec3 wz = w - z;
-    // Inside the cone iff 1 - cos(theta) <= om, i.e. |w - z|^2 = 2 (1 - cos) <= 2 om (no cancellation).
-    if (dot(wz, wz) > 2.0 * om * (1.0 + LIGHT_EDGE_MARGIN)) return h;
+    if (!in_cone(w, z, om)) return h;
     float ct = dot(w, z);
     vec3 cr = cross(w, z);
     float st2 = dot(cr, cr);
@@ -323,7 +331,8 @@ LightHit disk_hit(GpuLight l, vec3 p, vec3 w) {
     float t = dot(pc, nl) / dn;
     if (!(t > 0.0)) return h;
     vec3 q = t * w - pc;
-    if (dot(q, q) > R * R * (1.0 + 2.0 * LIGHT_EDGE_MARGIN)) return h;
+    float rm = R * (1.0 + LIGHT_EDGE_MARGIN) + LIGHT_POSITION_ULPS * t;
+    if (dot(q, q) > rm * rm) return h;
     h.t = t;
     h.n = nl;
     h.uv = vec2(dot(q, l.p2.xyz), dot(q, cross(nl, l.p2.xyz))) / (2.0 * R) + 0.5;
@@ -360,8 +369,7 @@ LightHit sun_hit(GpuLight l, vec3 w) {
     LightHit h = light_miss();
     float om = l.p1.x;
     if (om <= 0.0) return h;   // a delta light is never hit by a BRDF sample
-    vec3 wz = w - l.p0.xyz;
-    if (dot(wz, wz) > 2.0 * om * (1.0 + LIGHT_EDGE_MARGIN)) return h;
+    if (!in_cone(w, l.p0.xyz, om)) return h;
     h.n = -l.p0.xyz;
     h.pdf = 1.0 / (2.0 * PI * om);
     return h;
@@ -401,7 +409,7 @@ LightHit triangle_hit(GpuLight l, vec3 p, vec3 w) {
     vec3 qv = cross(tv, e1);
     float b2 = dot(w, qv) / det;
     float t = dot(e2, qv) / det;
-    float m = LIGHT_EDGE_MARGIN;
+    float m = LIGHT_EDGE_MARGIN + LIGHT_POSITION_ULPS * t * inversesqrt(min(dot(e1, e1), dot(e2, e2)));
     if (!(t > 0.0) || b1 < -m || b2 < -m || b1 + b2 > 1.0 + m) return h;
     h.t = t;
     h.n = N / len;

@@ -33,18 +33,19 @@ float mis_r_over_one_plus_sq(float r) {
 
 // r = n_b p_b / (n_a p_a) as (n_b / n_a) (p_b / p_a), so that (n p) is never formed: sample counts
 // are moderate, and when p_b / p_a leaves the float range, 0 or +inf is the right limit for every
-// weight below. 0 when n_b p_b == 0; +inf when n_a p_a == 0 < n_b p_b.
+// weight below. 0 when n_b p_b == 0; +inf when n_a p_a == 0 < n_b p_b; n_b / n_a for two infinite
+// pdfs.
 float mis_ratio(float n_a, float p_a, float n_b, float p_b) {
     if (!(n_b > 0.0) || !(p_b > 0.0)) return 0.0;
     if (!(n_a > 0.0) || !(p_a > 0.0)) return INF;
-    return (n_b / n_a) * (p_b / p_a);
+    // Two infinite pdfs (two deltas) compare by their counts.
+    return (n_b / n_a) * (p_a == INF && p_b == INF ? 1.0 : p_b / p_a);
 }
 
 // Power-heuristic weight of technique a at a point x that both techniques may produce:
 // (n_a p_a)^2 / ((n_a p_a)^2 + (n_b p_b)^2); 0 when p_a == 0, 1 when p_b == 0.
 float mis_power(float n_a, float p_a, float n_b, float p_b) {
     if (!(n_a > 0.0) || !(p_a > 0.0)) return 0.0;
-    if (p_a == INF) return p_b == INF ? 0.5 : 1.0;
     return mis_inv_one_plus_sq(mis_ratio(n_a, p_a, n_b, p_b));
 }
 
@@ -61,11 +62,11 @@ float mis_brdf_weight(float n_l, float p_l, float n_b, float p_b) { return mis_p
 //                                = F L_e * (1/N_B) / (1 + 1/r^2)        <= F L_e / N_B
 // These return the factors multiplying F L_e V (so the pdfs enter only as a ratio and the terms are
 // bounded). With N_B == 0 (no BRDF samples) the light-sample term is the plain estimator
-// F L_e p_B / (N_L p_L); with p_L == 0 (a BRDF direction the light sampler cannot produce, or a
+// F L_e p_B / (N_L p_L) (unbounded; clamped to the float range); with p_L == 0 (a BRDF direction the light sampler cannot produce, or a
 // delta lobe) the BRDF term is F L_e / N_B.
 float mis_dbrdf_light_factor(float n_l, float p_l, float n_b, float p_b) {
     if (!(n_l > 0.0) || !(p_l > 0.0) || !(p_b > 0.0)) return 0.0;
-    if (!(n_b > 0.0)) return (p_b / p_l) / n_l;
+    if (!(n_b > 0.0)) return min((p_b / p_l) / n_l, 3.4e38);
     return mis_r_over_one_plus_sq(mis_ratio(n_l, p_l, n_b, p_b)) / n_b;
 }
 

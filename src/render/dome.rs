@@ -177,7 +177,7 @@ mod tests {
     fn hot_texel_spreads_to_its_bilinear_neighbourhood_only() {
         let (w, h) = (8u32, 4u32);
         let mut texels = vec![Vec4::ZERO; (w * h) as usize];
-        texels[(1 * w + 3) as usize] = Vec4::new(1.0, 1.0, 1.0, 1.0);
+        texels[(w + 3) as usize] = Vec4::new(1.0, 1.0, 1.0, 1.0);
         let t = build(
             &Texture {
                 name: "hot".into(),
