@@ -16,7 +16,7 @@ pub mod error;
 pub mod vk;
 
 pub use error::{Error, Result};
-pub mod render;
-pub mod trace;
 pub mod metrics;
+pub mod render;
 pub mod report;
+pub mod trace;

@@ -25,7 +25,11 @@ fn finite(p: &[f32; 3]) -> bool {
 
 /// Errors of `image` against `reference` (same length).
 pub fn compare(image: &[[f32; 3]], reference: &[[f32; 3]]) -> ErrorMetrics {
-    assert_eq!(image.len(), reference.len(), "image and reference sizes differ");
+    assert_eq!(
+        image.len(),
+        reference.len(),
+        "image and reference sizes differ"
+    );
     let (mut se, mut rel, mut ae, mut n, mut bad) = (0.0, 0.0, 0.0, 0u64, 0u64);
     for (i, r) in image.iter().zip(reference) {
         if !finite(i) {
@@ -58,7 +62,12 @@ pub fn compare(image: &[[f32; 3]], reference: &[[f32; 3]]) -> ErrorMetrics {
 /// when the renderer is unbiased. The unknown reference in the relMSE denominator is replaced by
 /// the image itself, which biases the estimate up by about 3·Var(pixel)/pixel² (the curvature of
 /// 1/x²); that bias vanishes as samples accumulate. Returns None below 2 samples.
-pub fn estimated_relmse(image: &[[f32; 3]], even: &[[f32; 3]], odd: &[[f32; 3]], n: u32) -> Option<f64> {
+pub fn estimated_relmse(
+    image: &[[f32; 3]],
+    even: &[[f32; 3]],
+    odd: &[[f32; 3]],
+    n: u32,
+) -> Option<f64> {
     if n < 2 {
         return None;
     }
@@ -127,7 +136,9 @@ mod tests {
         let mut gauss = || {
             // Box-Muller from a 64-bit LCG.
             let mut u = || {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
             };
             let (a, b) = (u(), u());
@@ -155,12 +166,18 @@ mod tests {
             / pixels as f64;
         let est = estimated_relmse(&img, &even, &odd, n).unwrap();
         let tol = 5.0 * (2.0 / pixels as f64).sqrt() * expected;
-        assert!((est - expected).abs() < tol, "estimate {est}, expected {expected} ± {tol}");
+        assert!(
+            (est - expected).abs() < tol,
+            "estimate {est}, expected {expected} ± {tol}"
+        );
         // Against the true relMSE (reference denominators) it is biased by about 3σ²/n, the
         // curvature of 1/x²: 9% at this noise level, vanishing as samples accumulate.
         let truth = true_se / pixels as f64 / (1.0 + RELMSE_EPSILON);
         let bias = 3.0 * sigma * sigma / f64::from(n);
-        assert!((est / truth - 1.0 - bias).abs() < 0.05, "estimate {est}, true {truth}");
+        assert!(
+            (est / truth - 1.0 - bias).abs() < 0.05,
+            "estimate {est}, true {truth}"
+        );
         assert_eq!(estimated_relmse(&img, &even, &odd, 1), None);
     }
 }

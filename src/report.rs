@@ -41,7 +41,9 @@ pub fn write_csv(path: &Path, passes: &[PassReport]) -> Result<()> {
             opt(p.error.map(|e| e.relmse)),
             opt(p.error.map(|e| e.mae)),
             opt(p.estimated_relmse),
-            p.error.map(|e| e.non_finite_pixels.to_string()).unwrap_or_default(),
+            p.error
+                .map(|e| e.non_finite_pixels.to_string())
+                .unwrap_or_default(),
             p.non_finite_samples
         );
     }
@@ -70,7 +72,12 @@ pub fn plot_error(path: &Path, title: &str, y_label: &str, series: &[Series]) ->
     register_font();
     let (w, h) = (900u32, 560u32);
     let mut buf = vec![0u8; (w * h * 3) as usize];
-    let pts = || series.iter().flat_map(|s| s.points.iter()).filter(|p| p.0 > 0.0 && p.1 > 0.0);
+    let pts = || {
+        series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+    };
     if pts().next().is_none() {
         return Err(io(path, "no positive points to plot"));
     }
@@ -100,12 +107,19 @@ pub fn plot_error(path: &Path, title: &str, y_label: &str, series: &[Series]) ->
             .map_err(|x| e(&x))?;
         for (i, s) in series.iter().enumerate() {
             let c = COLORS[i % COLORS.len()];
-            let p: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect();
+            let p: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+                .collect();
             chart
                 .draw_series(LineSeries::new(p.clone(), c.stroke_width(2)))
                 .map_err(|x| e(&x))?
                 .label(s.name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
             chart
                 .draw_series(p.iter().map(|&q| Circle::new(q, 3, c.filled())))
                 .map_err(|x| e(&x))?;
@@ -125,7 +139,11 @@ pub fn plot_error(path: &Path, title: &str, y_label: &str, series: &[Series]) ->
 }
 
 fn srgb(v: f32) -> u8 {
-    let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+    let v = if v.is_finite() {
+        v.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let s = if v <= 0.003_130_8 {
         12.92 * v
     } else {
@@ -137,7 +155,13 @@ fn srgb(v: f32) -> u8 {
 /// False colour for t in [0, 1] (dark blue → green → yellow), a cheap viridis-like ramp.
 fn ramp(t: f64) -> [u8; 3] {
     let t = t.clamp(0.0, 1.0);
-    let stops = [(68.0, 1.0, 84.0), (59.0, 82.0, 139.0), (33.0, 145.0, 140.0), (94.0, 201.0, 98.0), (253.0, 231.0, 37.0)];
+    let stops = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (253.0, 231.0, 37.0),
+    ];
     let x = t * 4.0;
     let i = (x.floor() as usize).min(3);
     let f = x - i as f64;

@@ -30,7 +30,14 @@ fn assert_clean_error(code: i32, err: &str, needles: &[&str]) {
 fn renders_the_default_scene_to_exr_and_png() {
     let png = common::temp_path("default.png");
     let (code, _, err) = illum(&[
-        "render", "-o", png.to_str().unwrap(), "--spp", "1", "--width", "48", "--quiet",
+        "render",
+        "-o",
+        png.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--width",
+        "48",
+        "--quiet",
     ]);
     assert_eq!(code, 0, "stderr:\n{err}");
     assert!(png.exists() && png.with_extension("exr").exists());
@@ -84,6 +91,15 @@ fn bad_output_extension_and_zero_spp_are_rejected() {
 
 #[test]
 fn unwritable_output_is_named() {
-    let (code, _, err) = illum(&["render", "--spp", "1", "--width", "8", "-o", "/no/such/dir/x.exr", "--quiet"]);
+    let (code, _, err) = illum(&[
+        "render",
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "-o",
+        "/no/such/dir/x.exr",
+        "--quiet",
+    ]);
     assert_clean_error(code, &err, &["/no/such/dir/x.exr"]);
 }

@@ -96,7 +96,9 @@ fn rust_mirrors_match_the_glsl_layout() {
                 let m = m as u32;
                 let gname = r.member_names.get(&(id, m)).cloned().unwrap_or_default();
                 if gname != *field {
-                    problems.push(format!("{name}: member {m} is `{gname}` in GLSL, `{field}` in Rust"));
+                    problems.push(format!(
+                        "{name}: member {m} is `{gname}` in GLSL, `{field}` in Rust"
+                    ));
                 }
                 match r.offsets.get(&(id, m)) {
                     Some(&o) if o as usize == *offset => {}
@@ -125,10 +127,16 @@ fn rust_mirrors_match_the_glsl_layout() {
             && r.structs.contains_key(elem)
             && !expected.iter().any(|(e, _, _)| e == n)
         {
-            problems.push(format!("{n}: in layout_check.comp but not in src/layout.rs reflection()"));
+            problems.push(format!(
+                "{n}: in layout_check.comp but not in src/layout.rs reflection()"
+            ));
         }
     }
-    assert!(problems.is_empty(), "layout mismatches:\n{}", problems.join("\n"));
+    assert!(
+        problems.is_empty(),
+        "layout mismatches:\n{}",
+        problems.join("\n")
+    );
 }
 
 #[test]

@@ -37,7 +37,16 @@ fn half_buffer_estimate_agrees_with_the_true_error_across_passes() {
     // The image mean converges to the closed form (unbiased estimator): z-test on the mean.
     let n = out.film.beauty.len() as f64;
     let mean = out.film.beauty.iter().map(|p| f64::from(p[0])).sum::<f64>() / n;
-    let var_mean = out.film.variance.as_ref().unwrap().iter().map(|v| f64::from(v[0])).sum::<f64>() / n / n;
+    let var_mean = out
+        .film
+        .variance
+        .as_ref()
+        .unwrap()
+        .iter()
+        .map(|v| f64::from(v[0]))
+        .sum::<f64>()
+        / n
+        / n;
     let answer = f64::from(sun_plane_answer());
     assert!(
         (mean - answer).abs() < 4.0 * var_mean.sqrt() + 1e-6,
@@ -69,9 +78,19 @@ fn half_buffer_estimate_agrees_with_the_true_error_across_passes() {
     }
     assert!(checked >= 5, "only {checked} passes");
     // The true error falls like 1/spp for an unbiased estimator.
-    let first = out.passes.iter().find(|p| p.spp == 2).unwrap().error.unwrap().relmse;
+    let first = out
+        .passes
+        .iter()
+        .find(|p| p.spp == 2)
+        .unwrap()
+        .error
+        .unwrap()
+        .relmse;
     let last = out.passes.last().unwrap().error.unwrap().relmse;
-    assert!(last < first / 6.0, "relMSE {first} at 2 spp, {last} at 24 spp");
+    assert!(
+        last < first / 6.0,
+        "relMSE {first} at 2 spp, {last} at 24 spp"
+    );
 }
 
 #[test]
@@ -102,7 +121,10 @@ fn report_has_one_row_per_pass_with_time_non_decreasing() {
     illum::report::write_csv(&csv, &out.passes).unwrap();
     let text = std::fs::read_to_string(&csv).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    assert!(lines[0].starts_with("pass,spp,device_seconds,wall_seconds,rmse,relmse,mae,estimated_relmse"));
+    assert!(
+        lines[0]
+            .starts_with("pass,spp,device_seconds,wall_seconds,rmse,relmse,mae,estimated_relmse")
+    );
     assert_eq!(lines.len(), out.passes.len() + 1);
 }
 
