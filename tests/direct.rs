@@ -50,7 +50,12 @@ fn floor_points() -> Vec<Vec<DVec3>> {
     out
 }
 
-fn render_technique(json: &str, spp: u32, technique: Technique, seed: u64) -> illum::render::RenderOutput {
+fn render_technique(
+    json: &str,
+    spp: u32,
+    technique: Technique,
+    seed: u64,
+) -> illum::render::RenderOutput {
     let ctx = context();
     let settings = RenderSettings {
         spp,
@@ -89,7 +94,10 @@ fn disk_light_matches_the_vector_irradiance_closed_form() {
     // Disk of radius R at height h facing down, radiance L: §5.5 axial component at distance a.
     let (h, r, l) = (1.0, 0.5, 4.0);
     check_against(
-        &scene_with(r#"{"disk": {"center": [0, 1, 0], "normal": [0, -1, 0], "radius": 0.5}, "intensity": 4}"#, ""),
+        &scene_with(
+            r#"{"disk": {"center": [0, 1, 0], "normal": [0, -1, 0], "radius": 0.5}, "intensity": 4}"#,
+            "",
+        ),
         |p| {
             let a2 = p.x * p.x + p.z * p.z;
             let s = h * h + a2 + r * r;
@@ -104,7 +112,10 @@ fn sphere_light_matches_the_cap_irradiance() {
     // Sphere light above the floor, fully above every floor point's horizon: E = pi L sin^2 s cos t.
     let (c, r, l) = (DVec3::new(0.0, 1.0, 0.0), 0.3, 5.0);
     check_against(
-        &scene_with(r#"{"sphere": {"center": [0, 1, 0], "radius": 0.3}, "intensity": 5}"#, ""),
+        &scene_with(
+            r#"{"sphere": {"center": [0, 1, 0], "radius": 0.3}, "intensity": 5}"#,
+            "",
+        ),
         |p| {
             let d = c - p;
             let s2 = r * r / d.length_squared();
@@ -154,7 +165,12 @@ fn assert_same_image(a: &illum::output::Film, b: &illum::output::Film, spp: u32,
             let tol = z * (f64::from(va[i][c]) + f64::from(vb[i][c])).sqrt()
                 + 1e-5 * f64::from(a.beauty[i][c]).abs()
                 + 1e-6;
-            assert!(d.abs() <= tol, "{what}: pixel {i} channel {c}: {} vs {} (± {tol})", a.beauty[i][c], b.beauty[i][c]);
+            assert!(
+                d.abs() <= tol,
+                "{what}: pixel {i} channel {c}: {} vs {} (± {tol})",
+                a.beauty[i][c],
+                b.beauty[i][c]
+            );
         }
     }
 }
@@ -182,7 +198,12 @@ fn brdf_light_and_mis_converge_to_the_same_image() {
     let mis = render_technique(GLOSSY, 64, Technique::Mis, 11);
     let light = render_technique(GLOSSY, 64, Technique::Light, 12);
     let brdf = render_technique(GLOSSY, 384, Technique::Brdf, 13);
-    assert_eq!(mis.stats.non_finite_samples + light.stats.non_finite_samples + brdf.stats.non_finite_samples, 0);
+    assert_eq!(
+        mis.stats.non_finite_samples
+            + light.stats.non_finite_samples
+            + brdf.stats.non_finite_samples,
+        0
+    );
     assert_same_image(&mis.film, &light.film, 64, "mis vs light");
     assert_same_image(&mis.film, &brdf.film, 64, "mis vs brdf");
 }
@@ -239,7 +260,10 @@ fn many_lights_through_the_light_bvh_agree_with_light_sampling() {
     );
     let mis = render_technique(&json, 96, Technique::Mis, 31);
     let light = render_technique(&json, 96, Technique::Light, 32);
-    assert_eq!(mis.stats.non_finite_samples + light.stats.non_finite_samples, 0);
+    assert_eq!(
+        mis.stats.non_finite_samples + light.stats.non_finite_samples,
+        0
+    );
     assert_same_image(&mis.film, &light.film, 96, "many lights: mis vs light");
     // The lights are seen: the image is not black.
     assert!(mis.film.beauty.iter().map(|p| p[0]).sum::<f32>() > 1.0);

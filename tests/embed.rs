@@ -14,7 +14,12 @@ fn renders_on_an_application_device_and_leaves_it_alive() {
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_2);
         let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
         let instance = entry
-            .create_instance(&vk::InstanceCreateInfo::default().application_info(&app).enabled_layer_names(&layers), None)
+            .create_instance(
+                &vk::InstanceCreateInfo::default()
+                    .application_info(&app)
+                    .enabled_layer_names(&layers),
+                None,
+            )
             .expect("instance");
         let pd = instance.enumerate_physical_devices().unwrap()[0];
         let qf = instance
@@ -31,9 +36,17 @@ fn renders_on_an_application_device_and_leaves_it_alive() {
             .features(vk::PhysicalDeviceFeatures::default().shader_int64(true))
             .push_next(&mut f12);
         let prio = [1.0f32];
-        let qi = [vk::DeviceQueueCreateInfo::default().queue_family_index(qf).queue_priorities(&prio)];
+        let qi = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(qf)
+            .queue_priorities(&prio)];
         let device = instance
-            .create_device(pd, &vk::DeviceCreateInfo::default().queue_create_infos(&qi).push_next(&mut f2), None)
+            .create_device(
+                pd,
+                &vk::DeviceCreateInfo::default()
+                    .queue_create_infos(&qi)
+                    .push_next(&mut f2),
+                None,
+            )
             .expect("device");
         let queue = device.get_device_queue(qf, 0);
         let ctx = Context::from_external(ExternalDevice {
@@ -54,15 +67,26 @@ fn renders_on_an_application_device_and_leaves_it_alive() {
                 "lights": {"sky": {"dome": {}, "color": [1, 1, 1]}}}"#,
         );
         let out = Renderer::new(ctx.clone())
-            .render(&scene, &RenderSettings { spp: 2, ..Default::default() }, &mut |_, _| {})
+            .render(
+                &scene,
+                &RenderSettings {
+                    spp: 2,
+                    ..Default::default()
+                },
+                &mut |_, _| {},
+            )
             .expect("render on the embedded device");
         assert_eq!(out.stats.trace, "bvh");
         assert!(out.film.beauty.iter().any(|p| p[0] > 0.0));
         drop(out);
         drop(ctx);
         // The device is still the application's: it can still be used, then destroyed by it.
-        device.device_wait_idle().expect("device still alive after illum is dropped");
-        let fence = device.create_fence(&vk::FenceCreateInfo::default(), None).expect("still usable");
+        device
+            .device_wait_idle()
+            .expect("device still alive after illum is dropped");
+        let fence = device
+            .create_fence(&vk::FenceCreateInfo::default(), None)
+            .expect("still usable");
         device.destroy_fence(fence, None);
         device.destroy_device(None);
         instance.destroy_instance(None);

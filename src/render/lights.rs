@@ -70,7 +70,12 @@ pub fn build(lights: &[GpuLight]) -> LightBvh {
     }
 }
 
-fn split(items: &mut [(u32, Vec3, Vec3)], node: usize, nodes: &mut Vec<GpuLightNode>, refs: &mut Vec<u32>) {
+fn split(
+    items: &mut [(u32, Vec3, Vec3)],
+    node: usize,
+    nodes: &mut Vec<GpuLightNode>,
+    refs: &mut Vec<u32>,
+) {
     let lo = items.iter().fold(Vec3::splat(f32::MAX), |a, i| a.min(i.1));
     let hi = items.iter().fold(Vec3::splat(f32::MIN), |a, i| a.max(i.2));
     nodes[node].lo = lo.to_array();
@@ -82,11 +87,18 @@ fn split(items: &mut [(u32, Vec3, Vec3)], node: usize, nodes: &mut Vec<GpuLightN
         return;
     }
     let c = |i: &(u32, Vec3, Vec3)| (i.1 + i.2) * 0.5;
-    let (clo, chi) = items
-        .iter()
-        .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(a, b), i| (a.min(c(i)), b.max(c(i))));
+    let (clo, chi) = items.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(a, b), i| (a.min(c(i)), b.max(c(i))),
+    );
     let ext = chi - clo;
-    let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
     let mid = items.len() / 2;
     items.select_nth_unstable_by(mid, |a, b| c(a)[axis].total_cmp(&c(b)[axis]));
     let left = nodes.len();
@@ -116,8 +128,14 @@ mod tests {
                 ..Default::default()
             });
         }
-        lights.push(GpuLight { kind: LIGHT_DOME, ..Default::default() });
-        lights.push(GpuLight { kind: LIGHT_SUN, ..Default::default() });
+        lights.push(GpuLight {
+            kind: LIGHT_DOME,
+            ..Default::default()
+        });
+        lights.push(GpuLight {
+            kind: LIGHT_SUN,
+            ..Default::default()
+        });
         let bvh = build(&lights);
         let mut seen = bvh.refs.clone();
         seen.sort();

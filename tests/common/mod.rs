@@ -88,14 +88,16 @@ pub fn z_for(alpha: f64) -> f64 {
 pub fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t * (-z * z - 1.26551223
-        + t * (1.00002368
-            + t * (0.37409196
-                + t * (0.09678418
-                    + t * (-0.18628806
-                        + t * (0.27886807
-                            + t * (-1.13520398 + t * (1.48851513 + t * (-0.82215223 + t * 0.17087277)))))))))
-        .exp();
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398
+                                    + t * (1.48851513 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
     if x >= 0.0 { r } else { 2.0 - r }
 }
 
@@ -112,7 +114,12 @@ pub fn t_for(alpha: f64, dof: f64) -> f64 {
 /// with a t-test per pixel and channel, using the Variance AOV, at family-wise significance
 /// `alpha` (Šidák over all tests); and the image mean at the same level. Pixels with zero
 /// variance must match to float rounding.
-pub fn assert_matches_expectation(film: &illum::output::Film, spp: u32, expected: impl Fn(usize) -> [f64; 3], alpha: f64) {
+pub fn assert_matches_expectation(
+    film: &illum::output::Film,
+    spp: u32,
+    expected: impl Fn(usize) -> [f64; 3],
+    alpha: f64,
+) {
     let var = film.variance.as_ref().expect("variance AOV");
     let tests = (film.beauty.len() * 3) as f64;
     let per = 1.0 - (1.0 - alpha).powf(1.0 / tests);
@@ -124,7 +131,12 @@ pub fn assert_matches_expectation(film: &illum::output::Film, spp: u32, expected
             let d = f64::from(p[c]) - e[c];
             let v = f64::from(var[i][c]);
             let tol = z * v.sqrt() + 1e-5 * e[c].abs() + 1e-6;
-            assert!(d.abs() <= tol, "pixel {i} channel {c}: {} vs expected {} (± {tol})", p[c], e[c]);
+            assert!(
+                d.abs() <= tol,
+                "pixel {i} channel {c}: {} vs expected {} (± {tol})",
+                p[c],
+                e[c]
+            );
             sum_d[c] += d;
             sum_v[c] += v;
         }
@@ -133,6 +145,10 @@ pub fn assert_matches_expectation(film: &illum::output::Film, spp: u32, expected
     let zm = z_for(alpha / 3.0);
     for c in 0..3 {
         let tol = zm * sum_v[c].sqrt() / n + 1e-6;
-        assert!((sum_d[c] / n).abs() <= tol, "channel {c}: image mean off by {} (± {tol})", sum_d[c] / n);
+        assert!(
+            (sum_d[c] / n).abs() <= tol,
+            "channel {c}: image mean off by {} (± {tol})",
+            sum_d[c] / n
+        );
     }
 }
