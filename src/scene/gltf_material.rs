@@ -21,17 +21,7 @@ impl Loader<'_> {
         let material = match m.index() {
             Some(i) => self.convert(m, i)?,
             // glTF's default material is white metal; a neutral grey reads better.
-            None => Material {
-                name: format!("{}/default", self.req.shape),
-                diffuse: Vec3::splat(0.5),
-                diffuse_texture: None,
-                specular: Vec::new(),
-                metallic_roughness_texture: None,
-                emission: Vec3::ZERO,
-                emission_texture: None,
-                two_sided: false,
-                tangent_direction: None,
-            },
+            None => Material::lambert(format!("{}/default", self.req.shape), Vec3::splat(0.5)),
         };
         let id = self.parts.materials.len() as MaterialId;
         self.parts.materials.push(material);

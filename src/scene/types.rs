@@ -197,6 +197,23 @@ pub struct Light {
     pub visible: bool,
 }
 
+impl Material {
+    /// A plain Lambert material of albedo `diffuse`: no specular lobe, no emission.
+    pub fn lambert(name: impl Into<String>, diffuse: Vec3) -> Material {
+        Material {
+            name: name.into(),
+            diffuse,
+            diffuse_texture: None,
+            specular: Vec::new(),
+            metallic_roughness_texture: None,
+            emission: Vec3::ZERO,
+            emission_texture: None,
+            two_sided: false,
+            tangent_direction: None,
+        }
+    }
+}
+
 impl Light {
     /// color * intensity * 2^exposure.
     pub fn radiance(&self) -> Vec3 {

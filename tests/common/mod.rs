@@ -9,6 +9,9 @@ use illum::trace::TraceMode;
 use illum::vk::{Context, ContextOptions};
 use std::path::Path;
 
+mod stats;
+pub use stats::*;
+
 pub fn context() -> Context {
     Context::new(&ContextOptions {
         device: std::env::var("ILLUM_TEST_DEVICE").ok(),
@@ -66,48 +69,6 @@ pub fn temp_path(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("illum-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
-}
-
-/// Two-sided normal quantile for a tail probability `alpha` (Acklam's approximation is overkill:
-/// bisection on erfc is enough for tests).
-pub fn z_for(alpha: f64) -> f64 {
-    // P(|Z| > z) = erfc(z / sqrt 2); solve by bisection.
-    let (mut lo, mut hi) = (0.0f64, 40.0f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if erfc(mid / std::f64::consts::SQRT_2) > alpha {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-/// Complementary error function (Numerical Recipes' erfcc, relative error < 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.26551223
-            + t * (1.00002368
-                + t * (0.37409196
-                    + t * (0.09678418
-                        + t * (-0.18628806
-                            + t * (0.27886807
-                                + t * (-1.13520398
-                                    + t * (1.48851513 + t * (-0.82215223 + t * 0.17087277)))))))))
-            .exp();
-    if x >= 0.0 { r } else { 2.0 - r }
-}
-
-/// Two-sided quantile of Student's t with `dof` degrees of freedom for tail probability `alpha`
-/// (Cornish-Fisher expansion around the normal quantile): the statistic of a mean divided by its
-/// *estimated* standard error.
-pub fn t_for(alpha: f64, dof: f64) -> f64 {
-    let z = z_for(alpha);
-    let (z3, z5) = (z.powi(3), z.powi(5));
-    z + (z3 + z) / (4.0 * dof) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof)
 }
 
 /// Checks a rendered film of `spp` samples against the per-pixel expectation `expected(i)` (RGB)

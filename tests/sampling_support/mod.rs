@@ -119,27 +119,12 @@ impl Kernel {
     }
 }
 
+#[path = "../common/stats.rs"]
+mod stats;
+pub use stats::erfc;
+
 // ---------------------------------------------------------------------------------------------
 // Special functions
-
-/// Complementary error function, relative error < 1.2e-7 everywhere (Numerical Recipes `erfcc`,
-/// Chebyshev fit); good enough for p-values down to 1e-30 and for the exact Smith Lambda.
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let ans = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 { ans } else { 2.0 - ans }
-}
 
 pub fn erf(x: f64) -> f64 {
     1.0 - erfc(x)
