@@ -585,6 +585,9 @@ struct BenchTraceArgs {
     /// Paths to measure: both, rayquery or bvh.
     #[arg(long, default_value = "both")]
     trace: String,
+    /// Measurements of each figure; the best one is printed.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
     /// Device index or a substring of its name (see `illum devices`).
     #[arg(long)]
     device: Option<String>,
@@ -610,10 +613,11 @@ fn bench_trace(a: BenchTraceArgs) -> Result<()> {
         );
     }
     println!(
-        "device: {} ({}), {} rays per measurement",
+        "device: {} ({}), {} rays per measurement, best of {}",
         ctx.info().name,
         ctx.info().driver,
-        a.rays
+        a.rays,
+        a.repeat
     );
     println!(
         "{:>9} {:>8} | {:>8} {:>8} {:>8} | {:>13} {:>13} {:>13} | {:>5} {:>5}",
@@ -638,6 +642,7 @@ fn bench_trace(a: BenchTraceArgs) -> Result<()> {
             triangles: a.triangles.clone(),
             rays: a.rays,
             paths,
+            repeat: a.repeat,
         },
         &mut |r| {
             println!(

@@ -64,6 +64,8 @@ bool trace_occluded(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     RQ_PROCEED(rq, o, d, tmin, tmax)
     return rayQueryGetIntersectionTypeEXT(rq, true) != gl_RayQueryCommittedIntersectionNoneEXT;
 }
+#elif defined(TRACE_BVH)
+#include "trace_bvh.glsl"
 #else
 #error "no trace backend: define TRACE_RAYQUERY or TRACE_BVH"
 #endif

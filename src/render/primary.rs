@@ -28,7 +28,7 @@ impl PrimaryKernel {
         let pipeline = ComputePipeline::new(
             ctx,
             "primary",
-            trace.select(shaders::PRIMARY_RQ, shaders::PRIMARY_RQ),
+            trace.select(shaders::PRIMARY_RQ, shaders::PRIMARY_BVH),
             &bindings,
             std::mem::size_of::<PassConstants>() as u32,
             &[scene.features],

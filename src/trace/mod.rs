@@ -1,6 +1,9 @@
 //! Trace structures behind the one GLSL trace interface (glsl/shared/trace.glsl): hardware ray
 //! queries (acceleration structures) or illum's compute BVH.
 
+pub mod bench;
+pub mod bvh;
+pub mod query;
 pub mod rayquery;
 
 use crate::error::Result;
@@ -34,9 +37,41 @@ impl std::str::FromStr for TraceMode {
     }
 }
 
+/// What building a trace structure took: time and memory.
+///
+/// Ray queries: bottom levels are the compacted BLASes, the top level is the TLAS. Compute BVH:
+/// bottom levels are every mesh's nodes plus its triangles in leaf order, the top level is its
+/// nodes plus the instance records; `blas_seconds` is the host build of the bottom levels,
+/// `tlas_seconds` the top level plus the upload.
+#[derive(Clone, Debug, Default)]
+pub struct BuildStats {
+    pub blas_count: usize,
+    pub triangles: u64,
+    pub blas_bytes_uncompacted: u64,
+    pub blas_bytes: u64,
+    pub tlas_bytes: u64,
+    pub scratch_bytes: u64,
+    pub blas_seconds: f64,
+    pub compaction_seconds: f64,
+    pub tlas_seconds: f64,
+    /// Compute BVH: the deepest traversal stack a ray may need.
+    pub max_stack: u32,
+}
+
+impl BuildStats {
+    pub fn seconds(&self) -> f64 {
+        self.blas_seconds + self.compaction_seconds + self.tlas_seconds
+    }
+
+    pub fn bytes(&self) -> u64 {
+        self.blas_bytes + self.tlas_bytes
+    }
+}
+
 /// The trace structure a kernel binds.
 pub enum TraceStructure {
     RayQuery(RayQueryScene),
+    Bvh(bvh::BvhScene),
 }
 
 impl TraceStructure {
@@ -44,10 +79,7 @@ impl TraceStructure {
     pub fn build(ctx: &Context, scene: &GpuScene, mode: TraceMode) -> Result<TraceStructure> {
         match mode.resolve(ctx)? {
             TraceMode::RayQuery => Self::build_ray_query(ctx, scene),
-            _ => Err(crate::error::Error::Unsupported {
-                device: ctx.info().name.clone(),
-                what: "the compute-BVH trace path is not built yet".into(),
-            }),
+            _ => Ok(TraceStructure::Bvh(bvh::build(ctx, scene)?)),
         }
     }
 
@@ -55,13 +87,15 @@ impl TraceStructure {
     pub fn name(&self) -> &'static str {
         match self {
             TraceStructure::RayQuery(_) => "rayquery",
+            TraceStructure::Bvh(_) => "bvh",
         }
     }
 
     /// The SPIR-V variant of a kernel for this structure.
-    pub fn select<'a>(&self, rq: &'a [u8], _bvh: &'a [u8]) -> &'a [u8] {
+    pub fn select<'a>(&self, rq: &'a [u8], bvh: &'a [u8]) -> &'a [u8] {
         match self {
             TraceStructure::RayQuery(_) => rq,
+            TraceStructure::Bvh(_) => bvh,
         }
     }
 
@@ -71,6 +105,7 @@ impl TraceStructure {
             TraceStructure::RayQuery(_) => {
                 vec![(BINDING_TLAS, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)]
             }
+            TraceStructure::Bvh(_) => vec![(BINDING_BVH, vk::DescriptorType::UNIFORM_BUFFER)],
         }
     }
 
@@ -79,12 +114,16 @@ impl TraceStructure {
             TraceStructure::RayQuery(rq) => {
                 pipeline.bind_acceleration_structure(BINDING_TLAS, rq.tlas.handle)
             }
+            TraceStructure::Bvh(b) => {
+                pipeline.bind_buffer(BINDING_BVH, vk::DescriptorType::UNIFORM_BUFFER, &b.header)
+            }
         }
     }
 
-    pub fn build_stats(&self) -> &rayquery::BuildStats {
+    pub fn build_stats(&self) -> &BuildStats {
         match self {
             TraceStructure::RayQuery(rq) => &rq.stats,
+            TraceStructure::Bvh(b) => &b.stats,
         }
     }
 
@@ -149,7 +188,6 @@ impl TraceStructure {
     }
 }
 
-
 impl TraceMode {
     /// The concrete path for this device: `Auto` takes ray queries when the device has them.
     pub fn resolve(self, ctx: &Context) -> Result<TraceMode> {
@@ -158,7 +196,8 @@ impl TraceMode {
             TraceMode::Auto => Ok(TraceMode::Bvh),
             TraceMode::RayQuery if !ctx.ray_query() => Err(crate::error::Error::Unsupported {
                 device: ctx.info().name.clone(),
-                what: "--trace rayquery was asked for, but the device has no VK_KHR_ray_query".into(),
+                what: "--trace rayquery was asked for, but the device has no VK_KHR_ray_query"
+                    .into(),
             }),
             m => Ok(m),
         }

@@ -36,18 +36,7 @@ pub struct TlasInstance {
     pub mask: u8,
 }
 
-#[derive(Clone, Debug, Default)]
-pub struct BuildStats {
-    pub blas_count: usize,
-    pub triangles: u64,
-    pub blas_bytes_uncompacted: u64,
-    pub blas_bytes: u64,
-    pub tlas_bytes: u64,
-    pub scratch_bytes: u64,
-    pub blas_seconds: f64,
-    pub compaction_seconds: f64,
-    pub tlas_seconds: f64,
-}
+pub use super::BuildStats;
 
 pub struct AccelerationStructure {
     ctx: Context,

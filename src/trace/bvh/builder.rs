@@ -4,7 +4,7 @@
 //! built on their own threads (std::thread::scope), and the binning pass of very large nodes is
 //! split over the threads too, so that the first levels are not serial.
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 /// An axis-aligned box; empty when `lo > hi`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,31 +98,44 @@ impl Default for BuildParams {
 }
 
 const BINS: usize = 16;
+/// Nodes with at most this many primitives try every split between sorted centroids.
+const SWEEP: usize = 6;
 /// Nodes with at least this many primitives hand one child to another thread.
 const PARALLEL_SUBTREE: usize = 8192;
 /// Nodes with at least this many primitives bin on every thread they have.
 const PARALLEL_BINNING: usize = 1 << 17;
 
+/// A primitive's box with its index in `lo.w`, moved (not indexed) as the build partitions, so
+/// that every pass streams through memory. The index is stored as the bits of a normal float
+/// (exponent bit 30 set): denormals in the unused lane would slow every SIMD operation down.
 #[derive(Clone, Copy)]
-struct Bin {
-    bounds: Aabb,
-    centroids: Aabb,
-    count: u32,
+struct PrimRef {
+    lo: Vec4,
+    hi: Vec4,
 }
 
-const EMPTY_BIN: Bin = Bin {
-    bounds: Aabb::EMPTY,
-    centroids: Aabb::EMPTY,
-    count: 0,
-};
-
-type Bins = [[Bin; BINS]; 3];
-
-struct Input<'a> {
-    boxes: &'a [Aabb],
-    centroids: Vec<Vec3A>,
-    params: BuildParams,
+impl PrimRef {
+    fn bounds(&self) -> Aabb {
+        Aabb {
+            lo: Vec3A::from_vec4(self.lo),
+            hi: Vec3A::from_vec4(self.hi),
+        }
+    }
+    /// Twice the centroid (the build only compares centroids).
+    fn centroid2(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo) + Vec3A::from_vec4(self.hi)
+    }
+    fn id(&self) -> u32 {
+        self.lo.w.to_bits() & !ID_TAG
+    }
 }
+
+const ID_TAG: u32 = 0x4000_0000;
+/// Most primitives one build takes (their indices must fit below `ID_TAG`'s exponent range).
+pub const MAX_PRIMITIVES: usize = 1 << 27;
+
+type Bins = [[Aabb; BINS]; 3];
+type Counts = [[u32; BINS]; 3];
 
 /// Builds a binary BVH over `boxes` (none may be empty).
 pub fn build(boxes: &[Aabb], params: &BuildParams) -> BinaryBvh {
@@ -131,128 +144,141 @@ pub fn build(boxes: &[Aabb], params: &BuildParams) -> BinaryBvh {
         threads: params.threads.max(1),
         ..*params
     };
-    let centroids: Vec<Vec3A> = boxes.iter().map(Aabb::centre).collect();
-    let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
-    let mut nodes = Vec::with_capacity(2 * boxes.len() / params.max_leaf.max(2) + 1);
-    if boxes.is_empty() {
-        return BinaryBvh { nodes, order };
-    }
-    let inp = Input {
-        boxes,
-        centroids,
-        params,
-    };
-    let mut bounds = Aabb::EMPTY;
-    let mut cbounds = Aabb::EMPTY;
-    for (b, &c) in boxes.iter().zip(&inp.centroids) {
-        bounds = bounds.union(*b);
-        cbounds.grow(c);
-    }
-    build_rec(
-        &inp,
-        &mut order,
-        0,
-        bounds,
-        cbounds,
-        0,
-        params.threads,
-        &mut nodes,
+    assert!(
+        boxes.len() <= MAX_PRIMITIVES,
+        "too many primitives for one BVH"
     );
-    BinaryBvh { nodes, order }
+    let mut refs: Vec<PrimRef> = boxes
+        .iter()
+        .enumerate()
+        .map(|(i, b)| PrimRef {
+            lo: b.lo.extend(f32::from_bits(ID_TAG | i as u32)),
+            hi: b.hi.extend(0.0),
+        })
+        .collect();
+    let mut nodes = Vec::with_capacity(2 * boxes.len() / params.max_leaf.max(2) + 1);
+    if !refs.is_empty() {
+        let (bounds, cb) = bounds_of(&refs);
+        build_rec(
+            &params,
+            &mut refs,
+            0,
+            bounds,
+            cb,
+            0,
+            params.threads,
+            &mut nodes,
+        );
+    }
+    BinaryBvh {
+        nodes,
+        order: refs.iter().map(PrimRef::id).collect(),
+    }
 }
 
-fn bin_prims(inp: &Input, prims: &[u32], cb: &Aabb, scale: Vec3A) -> Box<Bins> {
-    let mut bins = Box::new([[EMPTY_BIN; BINS]; 3]);
-    for &p in prims {
-        let c = inp.centroids[p as usize];
-        let b = inp.boxes[p as usize];
-        let k = ((c - cb.lo) * scale)
+fn bin_prims(refs: &[PrimRef], cb: &Aabb, scale: Vec3A, bins: &mut Bins, counts: &mut Counts) {
+    for r in refs {
+        let b = r.bounds();
+        let k = ((r.centroid2() - cb.lo) * scale)
             .min(Vec3A::splat((BINS - 1) as f32))
             .max(Vec3A::ZERO);
-        for (axis, row) in bins.iter_mut().enumerate() {
-            let bin = &mut row[k[axis] as usize];
-            bin.bounds = bin.bounds.union(b);
-            bin.centroids.grow(c);
-            bin.count += 1;
+        for axis in 0..3 {
+            let i = k[axis] as usize;
+            bins[axis][i] = bins[axis][i].union(b);
+            counts[axis][i] += 1;
         }
     }
-    bins
 }
 
-fn bin_parallel(inp: &Input, prims: &[u32], cb: &Aabb, scale: Vec3A, threads: usize) -> Box<Bins> {
-    if threads < 2 || prims.len() < PARALLEL_BINNING {
-        return bin_prims(inp, prims, cb, scale);
+fn bin_parallel(
+    refs: &[PrimRef],
+    cb: &Aabb,
+    scale: Vec3A,
+    threads: usize,
+    bins: &mut Bins,
+    counts: &mut Counts,
+) {
+    if threads < 2 || refs.len() < PARALLEL_BINNING {
+        return bin_prims(refs, cb, scale, bins, counts);
     }
-    let chunk = prims.len().div_ceil(threads);
-    let parts: Vec<Box<Bins>> = std::thread::scope(|s| {
-        let handles: Vec<_> = prims
+    let chunk = refs.len().div_ceil(threads);
+    let parts: Vec<(Bins, Counts)> = std::thread::scope(|s| {
+        let handles: Vec<_> = refs
             .chunks(chunk)
-            .map(|c| s.spawn(move || bin_prims(inp, c, cb, scale)))
+            .map(|c| {
+                s.spawn(move || {
+                    let mut b = [[Aabb::EMPTY; BINS]; 3];
+                    let mut n = [[0; BINS]; 3];
+                    bin_prims(c, cb, scale, &mut b, &mut n);
+                    (b, n)
+                })
+            })
             .collect();
         handles
             .into_iter()
             .map(|h| h.join().expect("BVH binning thread panicked"))
             .collect()
     });
-    let mut bins = Box::new([[EMPTY_BIN; BINS]; 3]);
-    for part in parts {
-        for (row, prow) in bins.iter_mut().zip(part.iter()) {
-            for (bin, pbin) in row.iter_mut().zip(prow) {
-                bin.bounds = bin.bounds.union(pbin.bounds);
-                bin.centroids = bin.centroids.union(pbin.centroids);
-                bin.count += pbin.count;
+    for (pb, pn) in parts {
+        for axis in 0..3 {
+            for k in 0..BINS {
+                bins[axis][k] = bins[axis][k].union(pb[axis][k]);
+                counts[axis][k] += pn[axis][k];
             }
         }
     }
-    bins
 }
 
-/// The chosen split: axis, first bin of the right side, and both sides' boxes.
+/// The cheapest split: axis, first bin of the right side, SAH cost (areas times counts), and
+/// both sides' boxes.
 struct Split {
     axis: usize,
     bin: usize,
     cost: f32,
-    left: (Aabb, Aabb),
-    right: (Aabb, Aabb),
+    left: Aabb,
+    right: Aabb,
 }
 
-fn best_split(bins: &Bins, cb: &Aabb) -> Option<Split> {
+fn best_split(bins: &Bins, counts: &Counts, cb: &Aabb) -> Option<Split> {
     let mut best: Option<Split> = None;
-    for (axis, row) in bins.iter().enumerate() {
+    for axis in 0..3 {
         if cb.hi[axis] <= cb.lo[axis] {
             continue;
         }
-        // Right-to-left sweep: cost of the right side for every split position.
-        let mut right_cost = [0.0f32; BINS];
+        let (row, count) = (&bins[axis], &counts[axis]);
+        // Right-to-left sweep: the box and count of the right side of every split.
+        let mut right = [Aabb::EMPTY; BINS];
+        let mut right_n = [0u32; BINS];
         let mut acc = Aabb::EMPTY;
-        let mut n = 0u32;
+        let mut n = 0;
         for k in (1..BINS).rev() {
-            acc = acc.union(row[k].bounds);
-            n += row[k].count;
-            right_cost[k] = acc.half_area() * n as f32;
+            if count[k] != 0 {
+                acc = acc.union(row[k]);
+                n += count[k];
+            }
+            right[k] = acc;
+            right_n[k] = n;
         }
-        let mut lb = Aabb::EMPTY;
-        let mut lc = Aabb::EMPTY;
-        let mut ln = 0u32;
+        let mut left = Aabb::EMPTY;
+        let mut ln = 0;
         for k in 1..BINS {
-            lb = lb.union(row[k - 1].bounds);
-            lc = lc.union(row[k - 1].centroids);
-            ln += row[k - 1].count;
-            let rn: u32 = row[k..].iter().map(|b| b.count).sum();
-            if ln == 0 || rn == 0 {
+            // An empty bin moves no primitive across: the same split as the previous plane.
+            if count[k - 1] == 0 {
                 continue;
             }
-            let cost = lb.half_area() * ln as f32 + right_cost[k];
+            left = left.union(row[k - 1]);
+            ln += count[k - 1];
+            if right_n[k] == 0 {
+                break;
+            }
+            let cost = left.half_area() * ln as f32 + right[k].half_area() * right_n[k] as f32;
             if best.as_ref().is_none_or(|b| cost < b.cost) {
-                let (rb, rc) = row[k..].iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), bin| {
-                    (b.union(bin.bounds), c.union(bin.centroids))
-                });
                 best = Some(Split {
                     axis,
                     bin: k,
                     cost,
-                    left: (lb, lc),
-                    right: (rb, rc),
+                    left,
+                    right: right[k],
                 });
             }
         }
@@ -260,20 +286,29 @@ fn best_split(bins: &Bins, cb: &Aabb) -> Option<Split> {
     best
 }
 
-fn bounds_of(inp: &Input, prims: &[u32]) -> (Aabb, Aabb) {
+/// The box and the (doubled) centroid box of `refs`.
+fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let mut b = Aabb::EMPTY;
     let mut c = Aabb::EMPTY;
-    for &p in prims {
-        b = b.union(inp.boxes[p as usize]);
-        c.grow(inp.centroids[p as usize]);
+    for r in refs {
+        b = b.union(r.bounds());
+        c.grow(r.centroid2());
     }
     (b, c)
 }
 
+fn centroid_bounds(refs: &[PrimRef]) -> Aabb {
+    let mut c = Aabb::EMPTY;
+    for r in refs {
+        c.grow(r.centroid2());
+    }
+    c
+}
+
 /// Splits at the object median along the widest centroid axis (or, with all centroids equal, in
-/// the middle of the list). Returns the left count and both sides' boxes.
-fn median_split(inp: &Input, prims: &mut [u32], cb: &Aabb) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
-    let mid = prims.len() / 2;
+/// the middle of the list). Returns the left count.
+fn median_split(refs: &mut [PrimRef], cb: &Aabb) -> usize {
+    let mid = refs.len() / 2;
     let ext = cb.hi - cb.lo;
     let axis = if ext.x >= ext.y && ext.x >= ext.z {
         0
@@ -283,19 +318,61 @@ fn median_split(inp: &Input, prims: &mut [u32], cb: &Aabb) -> (usize, (Aabb, Aab
         2
     };
     if ext[axis] > 0.0 {
-        let c = &inp.centroids;
-        prims.select_nth_unstable_by(mid, |&a, &b| {
-            c[a as usize][axis].total_cmp(&c[b as usize][axis])
+        refs.select_nth_unstable_by(mid, |a, b| {
+            a.centroid2()[axis].total_cmp(&b.centroid2()[axis])
         });
     }
-    let (l, r) = prims.split_at(mid);
-    (mid, bounds_of(inp, l), bounds_of(inp, r))
+    mid
+}
+
+/// An object-median split with both sides' boxes.
+fn median(refs: &mut [PrimRef], cb: &Aabb) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    let nl = median_split(refs, cb);
+    let (l, r) = refs.split_at(nl);
+    (nl, bounds_of(l), bounds_of(r))
+}
+
+/// The cheapest split of a few primitives sorted by centroid along each axis: (axis, left
+/// count, SAH cost as areas times counts).
+fn sweep_split(refs: &[PrimRef]) -> Option<(usize, usize, f32)> {
+    let n = refs.len();
+    let mut best: Option<(usize, usize, f32)> = None;
+    let mut order = [0u8; SWEEP];
+    let mut right = [0.0f32; SWEEP];
+    for axis in 0..3 {
+        let key = |i: u8| refs[i as usize].centroid2()[axis];
+        for (i, o) in order[..n].iter_mut().enumerate() {
+            *o = i as u8;
+        }
+        order[..n].sort_unstable_by(|&a, &b| key(a).total_cmp(&key(b)));
+        if key(order[0]) == key(order[n - 1]) {
+            continue;
+        }
+        let mut acc = Aabb::EMPTY;
+        for k in (1..n).rev() {
+            acc = acc.union(refs[order[k] as usize].bounds());
+            right[k] = acc.half_area() * (n - k) as f32;
+        }
+        let mut left = Aabb::EMPTY;
+        for k in 1..n {
+            left = left.union(refs[order[k - 1] as usize].bounds());
+            // Only between distinct centroids, so that sorting the primitives reproduces it.
+            if key(order[k - 1]) == key(order[k]) {
+                continue;
+            }
+            let cost = left.half_area() * k as f32 + right[k];
+            if best.is_none_or(|b| cost < b.2) {
+                best = Some((axis, k, cost));
+            }
+        }
+    }
+    best
 }
 
 #[allow(clippy::too_many_arguments)]
 fn build_rec(
-    inp: &Input,
-    prims: &mut [u32],
+    p: &BuildParams,
+    refs: &mut [PrimRef],
     first: u32,
     bounds: Aabb,
     cb: Aabb,
@@ -303,25 +380,39 @@ fn build_rec(
     threads: usize,
     out: &mut Vec<BinaryNode>,
 ) -> u32 {
-    let n = prims.len();
+    let n = refs.len();
     let index = out.len() as u32;
-    let p = &inp.params;
     let leaf = BinaryNode {
         bounds,
         a: first,
         b: 0,
         count: n as u32,
     };
-    if n == 1 {
+    if n == 1 || (n <= p.max_leaf && depth >= p.median_depth) {
         out.push(leaf);
         return index;
     }
+    let area = bounds.half_area().max(f32::MIN_POSITIVE);
     let (nl, left, right) = if depth >= p.median_depth {
-        if n <= p.max_leaf {
-            out.push(leaf);
-            return index;
+        median(refs, &cb)
+    } else if n <= SWEEP {
+        // Few primitives: every split between sorted centroids, cheaper than binning.
+        match sweep_split(refs) {
+            Some((axis, k, cost)) => {
+                if n <= p.max_leaf && n as f32 <= p.traversal_cost + cost / area {
+                    out.push(leaf);
+                    return index;
+                }
+                refs.sort_unstable_by(|a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
+                let (l, r) = refs.split_at(k);
+                (k, bounds_of(l), bounds_of(r))
+            }
+            None if n <= p.max_leaf => {
+                out.push(leaf);
+                return index;
+            }
+            None => median(refs, &cb),
         }
-        median_split(inp, prims, &cb)
     } else {
         let ext = cb.hi - cb.lo;
         let scale = Vec3A::select(
@@ -329,32 +420,32 @@ fn build_rec(
             Vec3A::splat(BINS as f32) / ext,
             Vec3A::ZERO,
         );
-        let bins = bin_parallel(inp, prims, &cb, scale, threads);
-        match best_split(&bins, &cb) {
+        let mut bins = [[Aabb::EMPTY; BINS]; 3];
+        let mut counts = [[0; BINS]; 3];
+        bin_parallel(refs, &cb, scale, threads, &mut bins, &mut counts);
+        match best_split(&bins, &counts, &cb) {
             Some(s) => {
                 // SAH in units of one primitive intersection over this node's area.
-                let area = bounds.half_area().max(f32::MIN_POSITIVE);
-                let split_cost = p.traversal_cost + s.cost / area;
-                if n <= p.max_leaf && n as f32 <= split_cost {
+                if n <= p.max_leaf && n as f32 <= p.traversal_cost + s.cost / area {
                     out.push(leaf);
                     return index;
                 }
-                let (axis, bin) = (s.axis, s.bin);
-                let lo = cb.lo[axis];
-                let sc = scale[axis];
-                let c = &inp.centroids;
-                let in_left = |q: u32| {
-                    let k = (((c[q as usize][axis] - lo) * sc) as usize).min(BINS - 1);
-                    k < bin
-                };
-                let nl = partition(prims, in_left);
-                (nl, s.left, s.right)
+                let (axis, bin, lo, sc) = (s.axis, s.bin, cb.lo[s.axis], scale[s.axis]);
+                let nl = partition(refs, |r| {
+                    (((r.centroid2()[axis] - lo) * sc) as usize).min(BINS - 1) < bin
+                });
+                let (l, r) = refs.split_at(nl);
+                (
+                    nl,
+                    (s.left, centroid_bounds(l)),
+                    (s.right, centroid_bounds(r)),
+                )
             }
             None if n <= p.max_leaf => {
                 out.push(leaf);
                 return index;
             }
-            None => median_split(inp, prims, &cb),
+            None => median(refs, &cb),
         }
     };
     out.push(BinaryNode {
@@ -363,7 +454,7 @@ fn build_rec(
         b: 0,
         count: 0,
     });
-    let (lp, rp) = prims.split_at_mut(nl);
+    let (lp, rp) = refs.split_at_mut(nl);
     let rfirst = first + nl as u32;
     let (a, b) = if threads >= 2 && lp.len().min(rp.len()) >= PARALLEL_SUBTREE {
         let lt = threads / 2;
@@ -371,10 +462,10 @@ fn build_rec(
         let (a, right_nodes) = std::thread::scope(|s| {
             let h = s.spawn(move || {
                 let mut v = Vec::with_capacity(2 * rp.len() / p.max_leaf.max(2) + 1);
-                build_rec(inp, rp, rfirst, right.0, right.1, depth + 1, rt, &mut v);
+                build_rec(p, rp, rfirst, right.0, right.1, depth + 1, rt, &mut v);
                 v
             });
-            let a = build_rec(inp, lp, first, left.0, left.1, depth + 1, lt, out);
+            let a = build_rec(p, lp, first, left.0, left.1, depth + 1, lt, out);
             (a, h.join().expect("BVH build thread panicked"))
         });
         let offset = out.len() as u32;
@@ -387,8 +478,8 @@ fn build_rec(
         }));
         (a, offset)
     } else {
-        let a = build_rec(inp, lp, first, left.0, left.1, depth + 1, threads, out);
-        let b = build_rec(inp, rp, rfirst, right.0, right.1, depth + 1, threads, out);
+        let a = build_rec(p, lp, first, left.0, left.1, depth + 1, threads, out);
+        let b = build_rec(p, rp, rfirst, right.0, right.1, depth + 1, threads, out);
         (a, b)
     };
     out[index as usize].a = a;
@@ -397,11 +488,11 @@ fn build_rec(
 }
 
 /// Moves the elements for which `left` holds to the front; returns their count.
-fn partition(v: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+fn partition<T>(v: &mut [T], left: impl Fn(&T) -> bool) -> usize {
     let mut i = 0;
     let mut j = v.len();
     while i < j {
-        if left(v[i]) {
+        if left(&v[i]) {
             i += 1;
         } else {
             j -= 1;
@@ -465,6 +556,56 @@ mod tests {
             };
             let bvh = build(&boxes, &params);
             check(&bvh, &boxes, params.max_leaf);
+        }
+    }
+}
+#[cfg(test)]
+mod timing_tmp {
+    use super::*;
+    #[test]
+    #[ignore]
+    fn timing() {
+        let m = crate::trace::bench::displaced_sphere(1_000_000);
+        let boxes: Vec<Aabb> = m
+            .indices
+            .chunks(3)
+            .map(|t| Aabb::from_points(&[0, 1, 2].map(|k| Vec3A::from(m.positions[t[k] as usize]))))
+            .collect();
+        for threads in [1, 2, 1, 2] {
+            let t = std::time::Instant::now();
+            let b = build(
+                &boxes,
+                &BuildParams {
+                    threads,
+                    max_leaf: 4,
+                    ..Default::default()
+                },
+            );
+            let leaves = b.nodes.iter().filter(|n| n.count > 0).count();
+            let mut st = vec![(0u32, 0u32)];
+            let mut sum = 0u64;
+            let mut maxd = 0;
+            while let Some((i, d)) = st.pop() {
+                let n = b.nodes[i as usize];
+                if n.count > 0 {
+                    sum += (d as u64) * n.count as u64;
+                    maxd = maxd.max(d);
+                } else {
+                    st.push((n.a, d + 1));
+                    st.push((n.b, d + 1));
+                }
+            }
+            eprintln!(
+                "avg prim depth {:.1}, max {}",
+                sum as f64 / boxes.len() as f64,
+                maxd
+            );
+            eprintln!(
+                "threads {threads}: {:.1} ms, {} nodes, {} leaves",
+                t.elapsed().as_secs_f64() * 1e3,
+                b.nodes.len(),
+                leaves
+            );
         }
     }
 }

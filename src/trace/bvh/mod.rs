@@ -1,0 +1,309 @@
+//! illum's compute BVH: the trace structure for devices without ray queries, and for those where
+//! it is faster (see `TraceMode::resolve`).
+//!
+//! - Build (host, parallel): a binned-SAH binary tree per mesh over its triangles
+//!   ([`builder`]), a top-level tree over the instances (with their transforms) and the analytic
+//!   shapes, each collapsed into 4-wide nodes ([`nodes`]).
+//! - Memory: one array of nodes (every bottom level, then the top level), the triangles'
+//!   vertices gathered in leaf order (no index indirection at trace time), and the top-level
+//!   leaves; the kernels reach them through buffer device addresses held in a small uniform
+//!   buffer at `BINDING_BVH`, so no binding limit (128 MiB on lavapipe) applies.
+//! - Traversal: glsl/shared/trace_bvh.glsl.
+
+pub mod builder;
+pub mod nodes;
+
+use super::BuildStats;
+use crate::error::{Error, Result};
+use crate::layout::*;
+use crate::render::GpuScene;
+use crate::vk::{Buffer, Context};
+use ash::vk;
+use builder::{Aabb, BuildParams};
+use glam::{DMat4, DVec3, DVec4, Vec3A};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// The compute BVH of a scene, in device memory.
+pub struct BvhScene {
+    /// Uniform buffer holding the `BvhHeader` (bound at `BINDING_BVH`).
+    pub header: Buffer,
+    _nodes: Buffer,
+    _triangles: Buffer,
+    _instances: Buffer,
+    pub stats: BuildStats,
+}
+
+/// One mesh's bottom level: nodes with local links, triangles in leaf order.
+struct MeshBvh {
+    nodes: Vec<BvhNode>,
+    triangles: Vec<BvhTriangle>,
+    root: u32,
+    need: u32,
+    bounds: Aabb,
+}
+
+/// Meshes with at least this many triangles are built one at a time on every thread; smaller
+/// ones are spread over the threads, one mesh each.
+const LARGE_MESH: usize = 1 << 16;
+
+fn params(threads: usize) -> BuildParams {
+    let env = |k: &str, d: f32| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
+    BuildParams {
+        max_leaf: env("ILLUM_BVH_LEAF", 4.0) as usize,
+        traversal_cost: env("ILLUM_BVH_CT", 1.0),
+        threads,
+        ..Default::default()
+    }
+}
+
+fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize) -> MeshBvh {
+    let m = scene.meshes[mesh];
+    let pos = &scene.positions[m.first_vertex as usize..(m.first_vertex + m.vertex_count) as usize];
+    let idx =
+        &scene.indices[m.first_index as usize..(m.first_index + 3 * m.triangle_count) as usize];
+    let corners =
+        |t: usize| -> [Vec3A; 3] { [0, 1, 2].map(|k| Vec3A::from(pos[idx[3 * t + k] as usize])) };
+    let boxes: Vec<Aabb> = (0..m.triangle_count as usize)
+        .map(|t| Aabb::from_points(&corners(t)))
+        .collect();
+    let tt = Instant::now();
+    let bin = builder::build(&boxes, &params(threads));
+    if std::env::var("ILLUM_BVH_TIMING").is_ok() {
+        eprintln!("binary build {:.1} ms", tt.elapsed().as_secs_f64() * 1e3);
+    }
+    let mut nodes = Vec::new();
+    let (root, need) = nodes::collapse(&bin, &mut nodes, &|_, _| 0);
+    let triangles = bin
+        .order
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = corners(t as usize);
+            BvhTriangle {
+                v0: a.to_array(),
+                prim: t,
+                v1: b.to_array(),
+                pad0: 0,
+                v2: c.to_array(),
+                pad1: 0,
+            }
+        })
+        .collect();
+    MeshBvh {
+        nodes,
+        triangles,
+        root,
+        need,
+        bounds: bin.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
+    }
+}
+
+/// Builds every mesh's bottom level: large meshes in turn with all threads, then the small ones
+/// spread over the threads.
+fn build_meshes(scene: &GpuScene, threads: usize) -> Vec<MeshBvh> {
+    let n = scene.meshes.len();
+    let slots: Vec<Mutex<Option<MeshBvh>>> = (0..n).map(|_| Mutex::new(None)).collect();
+    let (large, small): (Vec<usize>, Vec<usize>) =
+        (0..n).partition(|&i| scene.meshes[i].triangle_count as usize >= LARGE_MESH);
+    for &i in &large {
+        *slots[i].lock().unwrap() = Some(build_mesh(scene, i, threads));
+    }
+    let next = AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..threads.min(small.len()) {
+            s.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&i) = small.get(k) else { break };
+                    let b = build_mesh(scene, i, 1);
+                    *slots[i].lock().unwrap() = Some(b);
+                }
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|s| s.into_inner().unwrap().expect("every mesh was built"))
+        .collect()
+}
+
+/// The world-space box of an object-space box under a 3x4 transform, padded so that the box test
+/// in world space never rejects a ray that hits in object space.
+fn transform_box(b: &Aabb, rows: &[[f32; 4]; 3]) -> Aabb {
+    let m = rows_to_mat(rows);
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for k in 0..8 {
+        let p = DVec3::new(
+            f64::from(if k & 1 == 0 { b.lo.x } else { b.hi.x }),
+            f64::from(if k & 2 == 0 { b.lo.y } else { b.hi.y }),
+            f64::from(if k & 4 == 0 { b.lo.z } else { b.hi.z }),
+        );
+        let q = m.transform_point3(p);
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    let pad = (hi - lo) * 1e-5 + (lo.abs().max(hi.abs())) * 1e-6 + DVec3::splat(1e-6);
+    let (lo, hi) = (lo - pad, hi + pad);
+    Aabb {
+        lo: Vec3A::new(lo.x as f32, lo.y as f32, lo.z as f32),
+        hi: Vec3A::new(hi.x as f32, hi.y as f32, hi.z as f32),
+    }
+}
+
+fn rows_to_mat(rows: &[[f32; 4]; 3]) -> DMat4 {
+    let r = |i: usize| DVec4::from_array(rows[i].map(f64::from));
+    DMat4::from_cols(r(0), r(1), r(2), DVec4::new(0.0, 0.0, 0.0, 1.0)).transpose()
+}
+
+/// Rows of the inverse of a 3x4 object-to-world transform, or None when it is singular.
+fn inverse_rows(rows: &[[f32; 4]; 3]) -> Option<[[f32; 4]; 3]> {
+    let m = rows_to_mat(rows);
+    let det = m.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = m.inverse();
+    let out = [0, 1, 2].map(|i| inv.row(i).to_array().map(|v| v as f32));
+    out.iter().flatten().all(|v| v.is_finite()).then_some(out)
+}
+
+/// Builds the compute BVH over an uploaded scene.
+pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let t0 = Instant::now();
+    let meshes = build_meshes(scene, threads);
+    let blas_seconds = t0.elapsed().as_secs_f64();
+
+    // Concatenate the bottom levels.
+    let t1 = Instant::now();
+    let mut nodes: Vec<BvhNode> = Vec::new();
+    let mut triangles: Vec<BvhTriangle> = Vec::new();
+    let mut roots = Vec::with_capacity(meshes.len());
+    for m in &meshes {
+        let (node_offset, prim_offset) = (nodes.len() as u32, triangles.len() as u32);
+        if triangles.len() + m.triangles.len() > BVH_LEAF_FIRST_MASK as usize {
+            return Err(Error::Unsupported {
+                device: ctx.info().name.clone(),
+                what: format!(
+                    "the compute BVH holds at most {} triangles",
+                    BVH_LEAF_FIRST_MASK
+                ),
+            });
+        }
+        nodes.extend(m.nodes.iter().map(|n| {
+            BvhNode {
+                links: n
+                    .links
+                    .map(|l| nodes::offset_link(l, node_offset, prim_offset)),
+                ..*n
+            }
+        }));
+        triangles.extend_from_slice(&m.triangles);
+        roots.push(nodes::offset_link(m.root, node_offset, prim_offset));
+    }
+    let blas_nodes = nodes.len();
+
+    // Top level: instances of non-empty meshes with an invertible transform, then the shapes.
+    let mut items: Vec<(Aabb, BvhInstance, u32)> = Vec::new();
+    for (i, (mesh, rows)) in scene.instances.iter().enumerate() {
+        let m = &meshes[*mesh as usize];
+        let Some(inv) = inverse_rows(rows) else {
+            continue;
+        };
+        if m.root == NONE {
+            continue;
+        }
+        let inst = BvhInstance {
+            world_to_object: inv,
+            root: roots[*mesh as usize],
+            index: i as u32,
+            mask: MASK_GEOMETRY,
+            pad: 0,
+        };
+        items.push((transform_box(&m.bounds, rows), inst, 1 + m.need));
+    }
+    for i in 0..scene.shapes.len() {
+        let b = scene.shape_boxes[i];
+        let inst = BvhInstance {
+            root: BVH_SHAPE,
+            index: i as u32,
+            mask: if (i as u32) < scene.geometry_shapes {
+                MASK_GEOMETRY
+            } else {
+                MASK_LIGHTS
+            },
+            ..Default::default()
+        };
+        let aabb = Aabb {
+            lo: Vec3A::new(b[0], b[1], b[2]),
+            hi: Vec3A::new(b[3], b[4], b[5]),
+        };
+        items.push((aabb, inst, 0));
+    }
+    let boxes: Vec<Aabb> = items.iter().map(|i| i.0).collect();
+    let top = builder::build(
+        &boxes,
+        &BuildParams {
+            max_leaf: 1,
+            ..params(threads)
+        },
+    );
+    let instances: Vec<BvhInstance> = top.order.iter().map(|&k| items[k as usize].1).collect();
+    let leaf_need = |first: u32, _| items[top.order[first as usize] as usize].2;
+    let mut top_nodes = Vec::new();
+    let (root, need) = nodes::collapse(&top, &mut top_nodes, &leaf_need);
+    let offset = nodes.len() as u32;
+    nodes.extend(top_nodes.iter().map(|n| BvhNode {
+        links: n.links.map(|l| nodes::offset_link(l, offset, 0)),
+        ..*n
+    }));
+    let root = nodes::offset_link(root, offset, 0);
+    if need > BVH_STACK_SIZE {
+        return Err(Error::Invalid(format!(
+            "the compute BVH is too deep: a walk may need {need} stack entries, the kernels have {BVH_STACK_SIZE}"
+        )));
+    }
+
+    if std::env::var("ILLUM_BVH_TIMING").is_ok() {
+        eprintln!("before upload {:.1} ms", t0.elapsed().as_secs_f64() * 1e3);
+    }
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let node_buffer = ctx.upload("BVH nodes", &nodes, storage)?;
+    let triangle_buffer = ctx.upload("BVH triangles", &triangles, storage)?;
+    let instance_buffer = ctx.upload("BVH instances", &instances, storage)?;
+    let header = BvhHeader {
+        nodes: node_buffer.address,
+        triangles: triangle_buffer.address,
+        instances: instance_buffer.address,
+        root,
+        node_count: nodes.len() as u32,
+    };
+    let header_buffer = ctx.upload(
+        "BVH header",
+        std::slice::from_ref(&header),
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+    )?;
+    let node_size = std::mem::size_of::<BvhNode>() as u64;
+    let blas_bytes = blas_nodes as u64 * node_size + std::mem::size_of_val(&triangles[..]) as u64;
+    let stats = BuildStats {
+        blas_count: meshes.len(),
+        triangles: triangles.len() as u64,
+        blas_bytes,
+        blas_bytes_uncompacted: blas_bytes,
+        tlas_bytes: (nodes.len() - blas_nodes) as u64 * node_size
+            + std::mem::size_of_val(&instances[..]) as u64,
+        blas_seconds,
+        tlas_seconds: t1.elapsed().as_secs_f64(),
+        max_stack: need,
+        ..Default::default()
+    };
+    Ok(BvhScene {
+        header: header_buffer,
+        _nodes: node_buffer,
+        _triangles: triangle_buffer,
+        _instances: instance_buffer,
+        stats,
+    })
+}

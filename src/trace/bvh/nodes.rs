@@ -1,0 +1,155 @@
+//! The node layout the kernels walk (glsl/shared/trace_bvh.glsl): binary trees collapsed into
+//! 4-wide nodes whose children's boxes are quantized to 8 bits per plane on a grid over the
+//! node's box (`BvhNode`, 64 bytes, 14 of its 16 words used), so that one small fetch tests four
+//! boxes. See src/trace/bvh/mod.rs for the measurements that chose this layout.
+
+use super::builder::{Aabb, BinaryBvh};
+use crate::layout::*;
+
+/// Children per node.
+pub const WIDTH: usize = 4;
+
+/// The link of a leaf of `count` primitives from `first`.
+pub fn leaf_link(first: u32, count: u32) -> u32 {
+    debug_assert!((1..=BVH_MAX_LEAF).contains(&count) && first <= BVH_LEAF_FIRST_MASK);
+    BVH_LEAF_BIT | ((count - 1) << BVH_LEAF_COUNT_SHIFT) | first
+}
+
+pub fn is_leaf(link: u32) -> bool {
+    link & BVH_LEAF_BIT != 0
+}
+
+/// Quantizes the boxes of a node's children (at most four, with their links) conservatively:
+/// every quantized box contains its child's box with a margin that covers the rounding of the
+/// kernels' slab test (a few ulp of the node's extent and of the coordinates).
+pub fn quantize(children: &[(Aabb, u32)]) -> BvhNode {
+    debug_assert!(children.len() <= WIDTH);
+    let mut node = BvhNode {
+        links: [NONE; 4],
+        lo_x: u32::MAX,
+        lo_y: u32::MAX,
+        lo_z: u32::MAX,
+        ..Default::default()
+    };
+    let mut bounds = Aabb::EMPTY;
+    for (b, _) in children {
+        bounds = bounds.union(*b);
+    }
+    let mut exponents = 0u32;
+    for axis in 0..3 {
+        let (lo, hi) = (f64::from(bounds.lo[axis]), f64::from(bounds.hi[axis]));
+        let slack = 1e-6 * (hi - lo) + (lo.abs().max(hi.abs())) * (1.0 / (1u64 << 22) as f64);
+        let mut origin = (lo - slack) as f32;
+        if f64::from(origin) > lo - slack {
+            origin = origin.next_down();
+        }
+        let origin64 = f64::from(origin);
+        let extent = hi + slack - origin64;
+        // The smallest power-of-two step whose 255 steps span the extent.
+        let mut e = if extent > 0.0 {
+            (extent / 255.0).log2().ceil().clamp(-126.0, 127.0) as i32
+        } else {
+            -126
+        };
+        while e < 127 && 255.0 * 2f64.powi(e) < extent {
+            e += 1;
+        }
+        while e > -126 && 255.0 * 2f64.powi(e - 1) >= extent {
+            e -= 1;
+        }
+        let step = 2f64.powi(e);
+        node.origin[axis] = origin;
+        exponents |= ((e + 127) as u32) << (8 * axis);
+        let (mut qlo, mut qhi) = (0u32, 0u32);
+        for (k, (b, _)) in children.iter().enumerate() {
+            let (clo, chi) = (f64::from(b.lo[axis]), f64::from(b.hi[axis]));
+            let l = ((clo - slack - origin64) / step).floor().clamp(0.0, 255.0) as u32;
+            let h = ((chi + slack - origin64) / step).ceil().clamp(0.0, 255.0) as u32;
+            qlo |= l << (8 * k);
+            qhi |= h << (8 * k);
+        }
+        // Unused slots: an empty box (lo 255 > hi 0); their NONE link masks them anyway.
+        for k in children.len()..WIDTH {
+            qlo |= 255 << (8 * k);
+        }
+        match axis {
+            0 => (node.lo_x, node.hi_x) = (qlo, qhi),
+            1 => (node.lo_y, node.hi_y) = (qlo, qhi),
+            _ => (node.lo_z, node.hi_z) = (qlo, qhi),
+        }
+    }
+    node.scale = exponents;
+    for (k, (_, link)) in children.iter().enumerate() {
+        node.links[k] = *link;
+    }
+    node
+}
+
+/// Collapses `bin` into wide nodes appended to `nodes` (node links are indices into `nodes`;
+/// leaf links hold leaf-order positions, unoffset). `leaf_need(first, count)` is the stack depth
+/// a leaf adds (top-level leaves: the marker plus the instance's own tree). Returns the root link
+/// (a leaf link when the whole tree is one leaf, NONE when it is empty) and the stack depth a
+/// walk of it may reach.
+pub fn collapse(
+    bin: &BinaryBvh,
+    nodes: &mut Vec<BvhNode>,
+    leaf_need: &dyn Fn(u32, u32) -> u32,
+) -> (u32, u32) {
+    if bin.nodes.is_empty() {
+        return (NONE, 0);
+    }
+    collapse_node(bin, 0, nodes, leaf_need)
+}
+
+fn collapse_node(
+    bin: &BinaryBvh,
+    i: u32,
+    nodes: &mut Vec<BvhNode>,
+    leaf_need: &dyn Fn(u32, u32) -> u32,
+) -> (u32, u32) {
+    let n = &bin.nodes[i as usize];
+    if n.count > 0 {
+        return (leaf_link(n.a, n.count), leaf_need(n.a, n.count));
+    }
+    // Open the largest inner child until the node has WIDTH children (Wald et al. 2008).
+    let mut children = vec![n.a, n.b];
+    while children.len() < WIDTH {
+        let Some((k, _)) = children
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| bin.nodes[c as usize].count == 0)
+            .map(|(k, &c)| (k, bin.nodes[c as usize].bounds.half_area()))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            break;
+        };
+        let c = bin.nodes[children[k] as usize];
+        children[k] = c.a;
+        children.insert(k + 1, c.b);
+    }
+    let index = nodes.len();
+    nodes.push(BvhNode::default());
+    let mut quantized = Vec::with_capacity(children.len());
+    let mut need = 0;
+    for &c in &children {
+        let (link, child_need) = collapse_node(bin, c, nodes, leaf_need);
+        need = need.max(child_need);
+        quantized.push((bin.nodes[c as usize].bounds, link));
+    }
+    nodes[index] = quantize(&quantized);
+    // Visiting the nearest child leaves the others on the stack.
+    (index as u32, need + children.len() as u32 - 1)
+}
+
+/// Shifts a subtree's links into the global arrays: nodes by `node_offset`, leaf positions by
+/// `prim_offset`.
+pub fn offset_link(link: u32, node_offset: u32, prim_offset: u32) -> u32 {
+    if link == NONE {
+        NONE
+    } else if is_leaf(link) {
+        let first = (link & BVH_LEAF_FIRST_MASK) + prim_offset;
+        (link & !BVH_LEAF_FIRST_MASK) | first
+    } else {
+        link + node_offset
+    }
+}
