@@ -168,13 +168,17 @@ pub struct BvhHeader {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct BvhNode {
-    pub lo_x: [f32; 4],
-    pub hi_x: [f32; 4],
-    pub lo_y: [f32; 4],
-    pub hi_y: [f32; 4],
-    pub lo_z: [f32; 4],
-    pub hi_z: [f32; 4],
+    pub origin: [f32; 3],
+    pub scale: u32,
+    pub lo_x: u32,
+    pub hi_x: u32,
+    pub lo_y: u32,
+    pub hi_y: u32,
+    pub lo_z: u32,
+    pub hi_z: u32,
     pub links: [u32; 4],
+    pub pad0: u32,
+    pub pad1: u32,
 }
 
 #[repr(C)]
@@ -361,13 +365,17 @@ pub fn reflection() -> Vec<StructLayout> {
             node_count
         }),
         describe!(BvhNode {
+            origin,
+            scale,
             lo_x,
             hi_x,
             lo_y,
             hi_y,
             lo_z,
             hi_z,
-            links
+            links,
+            pad0,
+            pad1
         }),
         describe!(BvhTriangle {
             v0,

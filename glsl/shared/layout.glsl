@@ -247,16 +247,22 @@ struct BvhHeader {
     uint node_count;
 };
 
-// Four children's boxes in SoA form, so that one node fetch tests all of them; an unused slot has
-// an empty box (lo > hi) and link NONE.
+// Four children's boxes, quantized to 8 bits per plane on a grid over the node's own box (one
+// byte per child in each plane word, so that one 64-byte fetch tests all four): child k's box is
+// origin + step * byte k of lo_*/hi_*, step = 2^(byte a of `scale` - 127) along axis a. An unused
+// slot has link NONE.
 struct BvhNode {
-    vec4 lo_x;
-    vec4 hi_x;
-    vec4 lo_y;
-    vec4 hi_y;
-    vec4 lo_z;
-    vec4 hi_z;
+    vec3 origin;
+    uint scale;
+    uint lo_x;
+    uint hi_x;
+    uint lo_y;
+    uint hi_y;
+    uint lo_z;
+    uint hi_z;
     uvec4 links;
+    uint pad0;
+    uint pad1;
 };
 
 // A triangle's object-space vertices gathered in leaf order (no index indirection).

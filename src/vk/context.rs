@@ -13,6 +13,8 @@ pub struct DeviceInfo {
     pub name: String,
     pub kind: &'static str,
     pub driver: String,
+    /// VkDriverId (e.g. MESA_LLVMPIPE for lavapipe), for choices that depend on the driver.
+    pub driver_id: vk::DriverId,
     pub api_version: String,
     /// Sum of the device-local heaps, in bytes.
     pub device_local_memory: u64,
@@ -227,6 +229,7 @@ unsafe fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usiz
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default(),
             kind: kind_name(props.device_type),
+            driver_id: driver.driver_id,
             driver: format!(
                 "{} {}",
                 driver
