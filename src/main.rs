@@ -191,7 +191,11 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
-fn load_scene(path: Option<&Path>, width: Option<u32>, height: Option<u32>) -> Result<illum::scene::Scene> {
+fn load_scene(
+    path: Option<&Path>,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<illum::scene::Scene> {
     let mut scene = match path {
         Some(p) => illum::scene::load(p)?,
         None => illum::scene::default_scene(),

@@ -49,10 +49,9 @@ struct MeshBvh {
 const LARGE_MESH: usize = 1 << 16;
 
 fn params(threads: usize) -> BuildParams {
-    let env = |k: &str, d: f32| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
     BuildParams {
-        max_leaf: env("ILLUM_BVH_LEAF", 4.0) as usize,
-        traversal_cost: env("ILLUM_BVH_CT", 1.0),
+        max_leaf: 4,
+        traversal_cost: 1.0,
         threads,
         ..Default::default()
     }
@@ -68,11 +67,7 @@ fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize) -> MeshBvh {
     let boxes: Vec<Aabb> = (0..m.triangle_count as usize)
         .map(|t| Aabb::from_points(&corners(t)))
         .collect();
-    let tt = Instant::now();
     let bin = builder::build(&boxes, &params(threads));
-    if std::env::var("ILLUM_BVH_TIMING").is_ok() {
-        eprintln!("binary build {:.1} ms", tt.elapsed().as_secs_f64() * 1e3);
-    }
     let mut nodes = Vec::new();
     let (root, need) = nodes::collapse(&bin, &mut nodes, &|_, _| 0);
     let triangles = bin
@@ -266,9 +261,6 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
         )));
     }
 
-    if std::env::var("ILLUM_BVH_TIMING").is_ok() {
-        eprintln!("before upload {:.1} ms", t0.elapsed().as_secs_f64() * 1e3);
-    }
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let node_buffer = ctx.upload("BVH nodes", &nodes, storage)?;
     let triangle_buffer = ctx.upload("BVH triangles", &triangles, storage)?;
