@@ -103,3 +103,84 @@ fn unwritable_output_is_named() {
     ]);
     assert_clean_error(code, &err, &["/no/such/dir/x.exr"]);
 }
+
+#[test]
+fn compare_writes_table_plot_and_strip_and_matches_a_separate_render() {
+    let dir = common::temp_path("compare");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("s.json");
+    std::fs::write(
+        &scene,
+        r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0.4, 0], "fov_y": 40, "resolution": [24, 16]},
+            "materials": {"m": {"diffuse": [0.4, 0.4, 0.4], "specular": [{"model": "dbrdf", "roughness": 0.2}]}},
+            "shapes": {"s": {"sphere": {"center": [0, 0.4, 0], "radius": 0.4}, "material": "m"},
+                       "f": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "m"}},
+            "lights": {"l": {"sphere": {"center": [1, 1.5, 1], "radius": 0.2}, "intensity": 20}}}"#,
+    )
+    .unwrap();
+    let s = scene.to_str().unwrap();
+    let reference = dir.join("ref.exr");
+    let r = reference.to_str().unwrap();
+    let (code, _, err) = illum(&[
+        "render", s, "-o", r, "--spp", "64", "--seed", "99", "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let prefix = dir.join("cmp");
+    let (code, out, err) = illum(&[
+        "compare",
+        s,
+        "--techniques",
+        "light,mis",
+        "--time",
+        "0.3",
+        "--reference",
+        r,
+        "-o",
+        prefix.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    for f in [
+        "cmp-error.png",
+        "cmp-strip.png",
+        "cmp-light.exr",
+        "cmp-mis.exr",
+    ] {
+        assert!(dir.join(f).exists(), "{f} missing; stdout:\n{out}");
+    }
+    // Table rows: technique, spp, seconds, relMSE, efficiency.
+    for technique in ["light", "mis"] {
+        let row: Vec<&str> = out
+            .lines()
+            .find(|l| l.starts_with(technique))
+            .unwrap_or_else(|| panic!("no {technique} row in:\n{out}"))
+            .split_whitespace()
+            .collect();
+        let (spp, relmse): (u32, f64) = (row[1].parse().unwrap(), row[3].parse().unwrap());
+        let report = dir.join(format!("{technique}.csv"));
+        let (code, _, err) = illum(&[
+            "render",
+            s,
+            "-o",
+            dir.join(format!("{technique}.exr")).to_str().unwrap(),
+            "--technique",
+            technique,
+            "--spp",
+            &spp.to_string(),
+            "--reference",
+            r,
+            "--report",
+            report.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let csv = std::fs::read_to_string(&report).unwrap();
+        let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+        assert_eq!(last[1].parse::<u32>().unwrap(), spp);
+        let separate: f64 = last[5].parse().unwrap();
+        // Same seed and samples: the same image, so the same error (the table prints 5 digits).
+        assert!(
+            (separate - relmse).abs() <= 1e-4 * relmse,
+            "{technique}: compare says {relmse}, render says {separate}"
+        );
+    }
+}
