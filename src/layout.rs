@@ -96,8 +96,9 @@ pub struct GpuMaterial {
     pub flags: u32,
     pub lobe_count: u32,
     pub metallic_roughness_texture: u32,
-    pub pad0: u32,
+    pub roughness: f32,
     pub pad1: u32,
+    pub base_metallic: [f32; 4],
     pub lobes: [GpuLobe; 2],
 }
 
@@ -314,8 +315,9 @@ pub fn reflection() -> Vec<StructLayout> {
             flags,
             lobe_count,
             metallic_roughness_texture,
-            pad0,
+            roughness,
             pad1,
+            base_metallic,
             lobes
         }),
         describe!(GpuLight {

@@ -61,7 +61,7 @@ pub fn approx_mat(a: &DMat4, b: &DMat4, eps: f64) -> bool {
 #[test]
 fn default_scene_loads() {
     let s = default_scene();
-    assert_eq!((s.camera.width, s.camera.height), (512, 512));
+    assert_eq!((s.camera.width, s.camera.height), (768, 384));
     assert_eq!(s.shapes.len(), 7, "ground + 6 spheres");
     assert_eq!(s.lights.len(), 2);
     assert!(s.source.is_none());

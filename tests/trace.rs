@@ -82,17 +82,7 @@ fn mesh(name: &str, positions: Vec<Vec3>, indices: Vec<u32>) -> Mesh {
 }
 
 fn material() -> Material {
-    Material {
-        name: "grey".into(),
-        diffuse: Vec3::splat(0.6),
-        diffuse_texture: None,
-        specular: Vec::new(),
-        metallic_roughness_texture: None,
-        emission: Vec3::ZERO,
-        emission_texture: None,
-        two_sided: false,
-        tangent_direction: None,
-    }
+    Material::lambert("grey", Vec3::splat(0.6))
 }
 
 fn light(kind: LightKind) -> Light {

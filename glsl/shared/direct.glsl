@@ -262,8 +262,9 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     return result;
 }
 
-// The shading frame at a surface hit by a ray of direction d.
-Shading shading_at(Surface s, GpuMaterial m, vec3 d) {
+// The shading frame at a surface hit by a ray of direction d. Patches `m` where its parameters
+// vary per texel (glTF metallic-roughness).
+Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
     Shading sh;
     sh.p = s.p;
     sh.v = -d;
@@ -280,7 +281,18 @@ Shading shading_at(Surface s, GpuMaterial m, vec3 d) {
     }
     sh.t = normalize(t);
     sh.b = cross(sh.n, sh.t);
-    sh.albedo = m.diffuse * texture_lookup(m.diffuse_texture, s.uv).rgb;
+    vec3 tex = texture_lookup(m.diffuse_texture, s.uv).rgb;
+    sh.albedo = m.diffuse * tex;
+    if ((m.flags & MATERIAL_FLAG_METALLIC_ROUGHNESS) != 0u && m.lobe_count > 0u) {
+        // glTF: metallic in B, roughness in G of the metallic-roughness texture.
+        vec4 mr = texture_lookup(m.metallic_roughness_texture, s.uv);
+        vec3 base = m.base_metallic.rgb * tex;
+        float metallic = clamp(m.base_metallic.w * mr.b, 0.0, 1.0);
+        float roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
+        sh.albedo = base * (1.0 - metallic);
+        m.lobes[0].fresnel0.rgb = mix(vec3(0.04), base, metallic);
+        m.lobes[0].alpha = vec2(max(roughness * roughness, 1e-4));
+    }
     return sh;
 }
 

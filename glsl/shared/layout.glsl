@@ -58,6 +58,9 @@
 
 #define MATERIAL_FLAG_TWO_SIDED 1
 #define MATERIAL_FLAG_TANGENT_DIR 2
+// glTF metallic-roughness: diffuse, lobes[0].fresnel0 and lobes[0].alpha are re-derived per texel
+// from base_metallic, roughness and the base-colour and metallic-roughness textures.
+#define MATERIAL_FLAG_METALLIC_ROUGHNESS 4
 
 #define INSTANCE_FLAG_NORMALS 1
 #define INSTANCE_FLAG_UVS 2
@@ -173,8 +176,9 @@ struct GpuMaterial {
     uint flags;
     uint lobe_count;
     uint metallic_roughness_texture;
-    uint pad0;
+    float roughness;        // glTF roughness factor (MATERIAL_FLAG_METALLIC_ROUGHNESS)
     uint pad1;
+    vec4 base_metallic;     // glTF base colour factor, metallic factor
     GpuLobe lobes[2];
 };
 

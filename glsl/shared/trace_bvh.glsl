@@ -127,8 +127,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
             uint e = nodes.v[link].scale;
             vec3 a = uintBitsToFloat(uvec3(e << 23, (e >> 8) << 23, (e >> 16) << 23) & 0x7f800000u) * r.inv_d;
             vec3 b = (origin - r.o) * r.inv_d;
-            // Near and far planes by the ray's direction signs (an unused slot, lo 255 > hi 0,
-            // then gives near > far in every direction).
+            // Near and far planes by the ray's direction signs.
             uint lx = nodes.v[link].lo_x, hx = nodes.v[link].hi_x;
             uint ly = nodes.v[link].lo_y, hy = nodes.v[link].hi_y;
             uint lz = nodes.v[link].lo_z, hz = nodes.v[link].hi_z;
@@ -138,7 +137,8 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
                            bvh_bytes(a.z >= 0.0 ? hz : lz) * a.z + b.z);
             far = min(far * widen, vec4(tmax));
             uvec4 l = nodes.v[link].links;
-            bvec4 hits = lessThanEqual(near, far);
+            // An unused slot has link NONE (its box, lo 255 > hi 0, can pass the widened test).
+            bvec4 hits = bvec4(uvec4(lessThanEqual(near, far)) & uvec4(notEqual(l, uvec4(NONE))));
             vec4 key = mix(vec4(INF), near, hits);
             // Sorting network: nearest first.
 #define BVH_CSWAP(a, b) if (key.b < key.a) { float tk = key.a; key.a = key.b; key.b = tk; uint tl = l.a; l.a = l.b; l.b = tl; }

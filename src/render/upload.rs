@@ -390,6 +390,10 @@ impl GpuScene {
                     },
                     lobe_count: m.specular.len().min(2) as u32,
                     metallic_roughness_texture: m.metallic_roughness_texture.unwrap_or(NONE),
+                    roughness: m.metallic_roughness.map_or(0.0, |mr| mr.roughness),
+                    base_metallic: m
+                        .metallic_roughness
+                        .map_or([0.0; 4], |mr| mr.base_color.extend(mr.metallic).to_array()),
                     ..Default::default()
                 };
                 for (i, l) in m.specular.iter().take(2).enumerate() {

@@ -78,6 +78,11 @@ impl Loader<'_> {
                 },
             }],
             metallic_roughness_texture,
+            metallic_roughness: Some(crate::scene::MetallicRoughness {
+                base_color: base,
+                metallic,
+                roughness,
+            }),
             emission,
             emission_texture,
             two_sided: m.double_sided(),

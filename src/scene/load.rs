@@ -210,6 +210,7 @@ impl Builder<'_> {
             diffuse_texture: opt_tex("diffuse_texture", &def.diffuse_texture)?,
             specular,
             metallic_roughness_texture: None,
+            metallic_roughness: None,
             emission: ctx.nonneg_rgb(&format!("{f}.emission"), def.emission)?,
             emission_texture: opt_tex("emission_texture", &def.emission_texture)?,
             two_sided: def.two_sided,

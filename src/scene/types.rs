@@ -91,6 +91,10 @@ pub struct Material {
     pub specular: Vec<SpecularLobe>,
     /// glTF metallic-roughness: multiplies metallic (B) and roughness (G) per texel.
     pub metallic_roughness_texture: Option<TextureId>,
+    /// glTF metallic-roughness factors. When present the shader re-derives, per texel, the
+    /// diffuse albedo base·(1−metallic), the first lobe's Schlick f0 = mix(0.04, base, metallic)
+    /// and its alpha = roughness², with base = base_color × the base-colour texture.
+    pub metallic_roughness: Option<MetallicRoughness>,
     /// Emitted radiance (W·m⁻²·sr⁻¹), zero for non-emitters. Emits on the front side only
     /// (the side the geometric normal points to) unless `two_sided`.
     pub emission: Vec3,
@@ -99,6 +103,14 @@ pub struct Material {
     /// Material direction for the anisotropic tangent when the mesh has no tangents
     /// (projected onto the tangent plane); None: derived from the normal.
     pub tangent_direction: Option<Vec3>,
+}
+
+/// The factors of a glTF metallic-roughness material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MetallicRoughness {
+    pub base_color: Vec3,
+    pub metallic: f32,
+    pub roughness: f32,
 }
 
 #[derive(Clone, Debug)]
@@ -206,6 +218,7 @@ impl Material {
             diffuse_texture: None,
             specular: Vec::new(),
             metallic_roughness_texture: None,
+            metallic_roughness: None,
             emission: Vec3::ZERO,
             emission_texture: None,
             two_sided: false,

@@ -67,17 +67,7 @@ pub fn mesh_scene(mesh: Mesh, eye: DVec3, size: u32) -> Scene {
             width: size,
             height: size,
         },
-        materials: vec![Material {
-            name: "grey".into(),
-            diffuse: Vec3::splat(0.5),
-            diffuse_texture: None,
-            specular: Vec::new(),
-            metallic_roughness_texture: None,
-            emission: Vec3::ZERO,
-            emission_texture: None,
-            two_sided: false,
-            tangent_direction: None,
-        }],
+        materials: vec![Material::lambert("grey", Vec3::splat(0.5))],
         textures: Vec::new(),
         meshes: vec![mesh],
         instances: vec![MeshInstance {

@@ -26,9 +26,6 @@ pub fn quantize(children: &[(Aabb, u32)]) -> BvhNode {
     debug_assert!(children.len() <= WIDTH);
     let mut node = BvhNode {
         links: [NONE; 4],
-        lo_x: u32::MAX,
-        lo_y: u32::MAX,
-        lo_z: u32::MAX,
         ..Default::default()
     };
     let mut bounds = Aabb::EMPTY;
@@ -45,16 +42,19 @@ pub fn quantize(children: &[(Aabb, u32)]) -> BvhNode {
         }
         let origin64 = f64::from(origin);
         let extent = hi + slack - origin64;
-        // The smallest power-of-two step whose 255 steps span the extent.
+        // The smallest power-of-two step whose 255 steps span the extent. Steps stay at or above
+        // 2^-100, so that step / d (the kernels' slope) neither underflows nor is a denormal,
+        // which lavapipe may flush to zero.
+        const MIN_E: i32 = -100;
         let mut e = if extent > 0.0 {
-            (extent / 255.0).log2().ceil().clamp(-126.0, 127.0) as i32
+            (extent / 255.0).log2().ceil().clamp(MIN_E as f64, 127.0) as i32
         } else {
-            -126
+            MIN_E
         };
         while e < 127 && 255.0 * 2f64.powi(e) < extent {
             e += 1;
         }
-        while e > -126 && 255.0 * 2f64.powi(e - 1) >= extent {
+        while e > MIN_E && 255.0 * 2f64.powi(e - 1) >= extent {
             e -= 1;
         }
         let step = 2f64.powi(e);
@@ -68,7 +68,7 @@ pub fn quantize(children: &[(Aabb, u32)]) -> BvhNode {
             qlo |= l << (8 * k);
             qhi |= h << (8 * k);
         }
-        // Unused slots: an empty box (lo 255 > hi 0); their NONE link masks them anyway.
+        // Unused slots: an empty box (lo 255 > hi 0), and the NONE link the kernels check.
         for k in children.len()..WIDTH {
             qlo |= 255 << (8 * k);
         }
@@ -151,5 +151,70 @@ pub fn offset_link(link: u32, node_offset: u32, prim_offset: u32) -> u32 {
         (link & !BVH_LEAF_FIRST_MASK) | first
     } else {
         link + node_offset
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3A;
+
+    /// Decodes child `k`'s box exactly (f64) from a quantized node.
+    fn decode(n: &BvhNode, k: usize) -> ([f64; 3], [f64; 3]) {
+        let planes = [(n.lo_x, n.hi_x), (n.lo_y, n.hi_y), (n.lo_z, n.hi_z)];
+        let mut lo = [0.0; 3];
+        let mut hi = [0.0; 3];
+        for a in 0..3 {
+            let step = 2f64.powi(((n.scale >> (8 * a)) & 0xff) as i32 - 127);
+            let byte = |w: u32| f64::from((w >> (8 * k)) & 0xff);
+            lo[a] = f64::from(n.origin[a]) + byte(planes[a].0) * step;
+            hi[a] = f64::from(n.origin[a]) + byte(planes[a].1) * step;
+        }
+        (lo, hi)
+    }
+
+    #[test]
+    fn quantized_boxes_contain_their_children() {
+        let mut x = 0x1234_5678u32;
+        let mut rnd = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as f32 / u32::MAX as f32
+        };
+        for case in 0..2000 {
+            // Scales from tiny to large, far from the origin or not, flat boxes included.
+            let scale = 10f32.powi(case % 9 - 4);
+            let offset = Vec3A::new(rnd(), rnd(), rnd()) * 10f32.powi(case % 7 - 1);
+            let count = 1 + case as usize % WIDTH;
+            let children: Vec<(Aabb, u32)> = (0..count)
+                .map(|k| {
+                    let lo = offset + Vec3A::new(rnd(), rnd(), rnd()) * scale;
+                    let mut ext = Vec3A::new(rnd(), rnd(), rnd()) * scale * 0.3;
+                    if case % 5 == 0 {
+                        ext.y = 0.0;
+                    }
+                    (Aabb { lo, hi: lo + ext }, k as u32)
+                })
+                .collect();
+            let n = quantize(&children);
+            for (k, (b, link)) in children.iter().enumerate() {
+                let (lo, hi) = decode(&n, k);
+                for a in 0..3 {
+                    assert!(
+                        lo[a] <= f64::from(b.lo[a]),
+                        "case {case} child {k} axis {a}"
+                    );
+                    assert!(
+                        hi[a] >= f64::from(b.hi[a]),
+                        "case {case} child {k} axis {a}"
+                    );
+                }
+                assert_eq!(n.links[k], *link);
+            }
+            for k in count..WIDTH {
+                assert_eq!(n.links[k], NONE);
+            }
+        }
     }
 }
