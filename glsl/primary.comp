@@ -36,7 +36,15 @@ void main() {
                 GpuMaterial m = get_material(s.material);
                 Shading sh = shading_at(s, m, d);
                 acc.albedo += vec4(sh.albedo, 1.0);
-                beauty += direct_lighting(sh, m, rng);
+                vec3 direct = direct_lighting(sh, m, rng);
+                // Optional firefly clamp (hue-preserving, TECHNIQUES 7.6): biased, off by default.
+                // A non-finite value fails the test and is counted below, not hidden.
+                float y = luminance(direct);
+                if (frame.film_params.x > 0.0 && y > frame.film_params.x) {
+                    direct *= frame.film_params.x / y;
+                    acc.beauty.w += 1.0;
+                }
+                beauty += direct;
             } else {
                 acc.albedo.w += 1.0;
             }

@@ -30,6 +30,7 @@ pub struct Frame {
     pub light_nodes: u64,
     pub light_refs: u64,
     pub light_bvh: [u32; 4],
+    pub film_params: [f32; 4],
 }
 
 #[repr(C)]
@@ -266,7 +267,8 @@ pub fn reflection() -> Vec<StructLayout> {
             dome_sampling,
             light_nodes,
             light_refs,
-            light_bvh
+            light_bvh,
+            film_params
         }),
         describe!(PassConstants {
             first_sample,

@@ -205,6 +205,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
                 radius: 0.25,
             }),
         ],
+        description: None,
         source: None,
     }
 }

@@ -121,6 +121,8 @@ struct Frame {
     uint64_t light_nodes;     // GpuLightNode array: BVH over the finite lights' bounds
     uint64_t light_refs;      // uint array: light indices in leaf order, then the infinite lights
     uvec4 light_bvh;          // node count, first infinite ref, infinite light count, unused
+    vec4 film_params;         // x: firefly clamp, the most luminance of one camera sample's direct
+                              // lighting (0: off; biased when on); yzw unused
 };
 
 // Per-dispatch constants.
@@ -233,7 +235,7 @@ struct GpuTexture {
 
 // Accumulated per pixel over all samples so far (sums, divided by the sample count on readback).
 struct FilmPixel {
-    vec4 beauty;     // rgb sum
+    vec4 beauty;     // rgb sum; w = samples the firefly clamp reduced
     vec4 beauty_sq;  // rgb sum of squares (for the variance of the mean); w = rays traced
     vec4 albedo;     // rgb sum over samples that hit a surface; w = number of such samples
     vec4 normal;     // xyz sum of shading normals; w = sum of hit distances

@@ -13,6 +13,8 @@ pub struct Resolved {
     pub even: Vec<[f32; 3]>,
     pub odd: Vec<[f32; 3]>,
     pub non_finite_samples: u64,
+    /// Camera samples whose direct lighting the firefly clamp reduced.
+    pub clamped_samples: u64,
     /// Rays traced (camera and shadow rays).
     pub rays: u64,
 }
@@ -40,6 +42,7 @@ pub fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> Resolved {
     let mut even = vec![[0.0f32; 3]; raw.len()];
     let mut odd = vec![[0.0f32; 3]; raw.len()];
     let mut non_finite = 0u64;
+    let mut clamped = 0u64;
     let mut rays = 0u64;
     for (i, p) in raw.iter().enumerate() {
         for c in 0..3 {
@@ -65,6 +68,7 @@ pub fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> Resolved {
             f32::INFINITY
         };
         non_finite += p.emission[3] as u64;
+        clamped += p.beauty[3] as u64;
         rays += p.beauty_sq[3] as u64;
     }
     film.variance = Some(variance);
@@ -74,6 +78,7 @@ pub fn resolve(raw: &[FilmPixel], w: u32, h: u32, spp: u32) -> Resolved {
         even,
         odd,
         non_finite_samples: non_finite,
+        clamped_samples: clamped,
         rays,
     }
 }

@@ -102,6 +102,9 @@ pub struct RenderSettings {
     pub reference: Option<Vec<[f32; 3]>>,
     /// Read the film back after every pass and evaluate it (implied by `reference`).
     pub evaluate_passes: bool,
+    /// Firefly clamp: the most luminance one camera sample's direct lighting may have (scaled
+    /// down, hue kept, above it). None: off, the default. It biases the image (TECHNIQUES 7.6).
+    pub clamp: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -115,6 +118,7 @@ impl Default for RenderSettings {
             samples_per_submit: 1 << 20,
             reference: None,
             evaluate_passes: false,
+            clamp: None,
         }
     }
 }
@@ -139,6 +143,8 @@ pub struct PassReport {
 #[derive(Clone, Debug, Default)]
 pub struct RenderStats {
     pub upload_seconds: f64,
+    /// The empty first dispatch (pipeline compilation by drivers that compile lazily).
+    pub warmup_seconds: f64,
     pub build: BuildStats,
     pub render_seconds: f64,
     pub device_seconds: f64,
@@ -148,6 +154,12 @@ pub struct RenderStats {
     pub non_finite_samples: u64,
     /// Rays traced: camera rays and shadow rays.
     pub rays: u64,
+    /// Lights of the scene that emit nothing (zero radiance or zero size), left out of the render.
+    pub dark_lights: Vec<String>,
+    /// Lights rendered, emissive shapes and triangles included (0: only emission seen directly).
+    pub emitters: u32,
+    /// Camera samples whose direct lighting the firefly clamp reduced (0 when it is off).
+    pub clamped_samples: u64,
     pub trace: &'static str,
 }
 
@@ -226,6 +238,14 @@ impl Renderer {
                 0
             },
         ];
+        if let Some(c) = settings.clamp {
+            if !(c.is_finite() && c > 0.0) {
+                return Err(Error::Invalid(format!(
+                    "--clamp must be a positive finite luminance, got {c}"
+                )));
+            }
+            gpu.frame.film_params[0] = c;
+        }
         let upload_seconds = t0.elapsed().as_secs_f64();
         let trace = TraceStructure::build(ctx, &gpu, mode)?;
         let build = trace.build_stats().clone();
@@ -253,6 +273,21 @@ impl Renderer {
         let kernel = PrimaryKernel::new(ctx, &gpu, &trace, &frame, &film)?;
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
+
+        // Warm-up: one empty dispatch, since drivers may compile the pipeline at its first
+        // dispatch (llvmpipe does: up to a second for the integrator), which would otherwise be
+        // charged to the first pass and skew the error-against-time curve.
+        let warm = Instant::now();
+        ctx.one_shot(|cmd| {
+            kernel.record(
+                cmd,
+                &PassConstants {
+                    tile: [0, 0, 1, 1],
+                    ..Default::default()
+                },
+            )
+        })?;
+        let warmup_seconds = warm.elapsed().as_secs_f64();
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows.
         const TILE: u32 = 512;
@@ -337,6 +372,7 @@ impl Renderer {
         Ok(RenderOutput {
             stats: RenderStats {
                 upload_seconds,
+                warmup_seconds,
                 build,
                 render_seconds: wall,
                 device_seconds: device,
@@ -345,6 +381,9 @@ impl Renderer {
                 non_finite_samples: resolved.non_finite_samples,
                 rays: resolved.rays,
                 trace: trace.name(),
+                dark_lights: gpu.dark_lights.clone(),
+                emitters: gpu.emitters,
+                clamped_samples: resolved.clamped_samples,
             },
             film: resolved.film,
             passes,

@@ -31,6 +31,10 @@ pub struct GpuScene {
     pub shape_boxes: Vec<[f32; 6]>,
     /// Camera position in world space: the origin of the render's coordinates.
     pub origin: DVec3,
+    /// Names of the scene's lights that emit nothing (zero radiance or area), left out.
+    pub dark_lights: Vec<String>,
+    /// Lights uploaded, emissive geometry included.
+    pub emitters: u32,
     /// Object-space vertex positions and triangle indices of every mesh (the `MeshRange`s index
     /// them as they do the GPU buffers): what the compute BVH is built from on the host.
     pub positions: Vec<Vec3>,
@@ -221,7 +225,23 @@ impl GpuScene {
         // Lights.
         let mut lights = Vec::new();
         let mut dome = NONE;
+        let mut dome_scene_index = 0;
+        let mut dark_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
+            // A light that emits nothing (zero radiance or zero area) is left out: sampling it
+            // would waste samples, and a zero area is a 1/0 pdf.
+            let zero_area = match &l.kind {
+                LightKind::Rect { u, v, .. } => (u.cross(*v).length() as f32) <= 0.0,
+                LightKind::Disk { radius, .. } | LightKind::Sphere { radius, .. } => {
+                    ((radius * radius) as f32) <= 0.0
+                }
+                LightKind::Dome { .. } | LightKind::Sun { .. } => false,
+            };
+            if zero_area || l.radiance().max_element() <= 0.0 {
+                dark_lights.push(l.name.clone());
+                continue;
+            }
+            let index = lights.len() as u32;
             let mut g = GpuLight {
                 radiance: v3(l.radiance()),
                 texture: l.texture.unwrap_or(NONE),
@@ -276,7 +296,8 @@ impl GpuScene {
                     let r = rotation_deg.to_radians();
                     g.kind = LIGHT_DOME;
                     g.p0 = [r.cos() as f32, r.sin() as f32, 0.0, 0.0];
-                    dome = i as u32;
+                    dome = index;
+                    dome_scene_index = i;
                     features |= FEATURE_DOME;
                     None
                 }
@@ -296,7 +317,7 @@ impl GpuScene {
             };
             if let (Some(geom), true) = (surface, l.visible) {
                 g.shape = shapes.len() as u32;
-                shapes.push(shape_of(&geom, NONE, i as u32));
+                shapes.push(shape_of(&geom, NONE, index));
             }
             lights.push(g);
         }
@@ -346,7 +367,7 @@ impl GpuScene {
             for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
                 let (a, b, c) = (world(tri[0]), world(tri[1]), world(tri[2]));
                 let area = 0.5 * (b - a).cross(c - a).length();
-                if area <= 0.0 {
+                if (area as f32) <= 0.0 {
                     continue; // degenerate: emits nothing
                 }
                 let mut p1 = v4(b - a, 0.0);
@@ -449,11 +470,11 @@ impl GpuScene {
         let mut dome_table = None;
         let mut dome_sampling = None;
         if dome != NONE
-            && let Some(t) = scene.lights[dome as usize].texture
+            && let Some(t) = scene.lights[dome_scene_index].texture
         {
             let table = super::dome::build(
                 &scene.textures[t as usize],
-                scene.lights[dome as usize].radiance(),
+                scene.lights[dome_scene_index].radiance(),
             );
             let data = ctx.upload("dome CDFs", &table.data(), storage)?;
             let gpu = table.gpu(data.address);
@@ -503,6 +524,8 @@ impl GpuScene {
                 light_bvh.infinite_count,
                 0,
             ],
+            // Set by the renderer from its settings.
+            film_params: [0.0; 4],
         };
         Ok(GpuScene {
             frame,
@@ -513,6 +536,8 @@ impl GpuScene {
             shapes,
             shape_boxes: aabbs,
             origin,
+            dark_lights,
+            emitters: lights.len() as u32,
             positions,
             indices,
             vertex_buffer,

@@ -26,9 +26,15 @@ impl Ctx<'_> {
         }
     }
 
-    pub fn positive(&self, field: &str, v: f64) -> Result<f64> {
+    /// A size: positive, or also zero when `zero_ok` (lights may be of zero size: they emit nothing).
+    pub fn size(&self, field: &str, v: f64, zero_ok: bool) -> Result<f64> {
+        if zero_ok && v == 0.0 {
+            return Ok(0.0);
+        }
         if v.is_finite() && v > 0.0 {
             Ok(v)
+        } else if zero_ok {
+            Err(self.err(field, fmt_num(v), "must be a finite number >= 0"))
         } else {
             Err(self.err(field, fmt_num(v), "must be a positive finite number"))
         }
@@ -112,28 +118,29 @@ impl Ctx<'_> {
         }
     }
 
-    pub fn sphere(&self, field: &str, s: &SphereDef) -> Result<(DVec3, f64)> {
+    /// `zero_ok`: a radius of 0 is allowed (lights).
+    pub fn sphere(&self, field: &str, s: &SphereDef, zero_ok: bool) -> Result<(DVec3, f64)> {
         Ok((
             self.point(&format!("{field}.center"), s.center)?,
-            self.positive(&format!("{field}.radius"), s.radius)?,
+            self.size(&format!("{field}.radius"), s.radius, zero_ok)?,
         ))
     }
 
     /// Returns (center, unit normal, radius).
-    pub fn disk(&self, field: &str, d: &DiskDef) -> Result<(DVec3, DVec3, f64)> {
+    pub fn disk(&self, field: &str, d: &DiskDef, zero_ok: bool) -> Result<(DVec3, DVec3, f64)> {
         Ok((
             self.point(&format!("{field}.center"), d.center)?,
             self.direction(&format!("{field}.normal"), d.normal)?,
-            self.positive(&format!("{field}.radius"), d.radius)?,
+            self.size(&format!("{field}.radius"), d.radius, zero_ok)?,
         ))
     }
 
     /// Returns (center, u, v): full edge vectors with normalize(u × v) = normal.
-    pub fn rect(&self, field: &str, r: &RectDef) -> Result<(DVec3, DVec3, DVec3)> {
+    pub fn rect(&self, field: &str, r: &RectDef, zero_ok: bool) -> Result<(DVec3, DVec3, DVec3)> {
         let center = self.point(&format!("{field}.center"), r.center)?;
         let n = self.direction(&format!("{field}.normal"), r.normal)?;
-        let su = self.positive(&format!("{field}.size[0]"), r.size[0])?;
-        let sv = self.positive(&format!("{field}.size[1]"), r.size[1])?;
+        let su = self.size(&format!("{field}.size[0]"), r.size[0], zero_ok)?;
+        let sv = self.size(&format!("{field}.size[1]"), r.size[1], zero_ok)?;
         let up = match r.up {
             Some(up) => self.direction(&format!("{field}.up"), up)?,
             None if n.y.abs() > 0.999 => DVec3::NEG_Z,

@@ -25,6 +25,8 @@ pub struct SceneFile {
     /// Optional reference to this schema, for editors; ignored by illum.
     #[serde(rename = "$schema")]
     pub _schema: Option<String>,
+    /// Free text: what the scene is for (shown by `illum stress` and in reports).
+    pub description: Option<String>,
     /// The viewpoint.
     pub camera: CameraDef,
     /// Images by name, referenced by materials and lights.
@@ -163,7 +165,7 @@ pub struct ShapeDef {
 #[serde(deny_unknown_fields)]
 pub struct SphereDef {
     pub center: V3,
-    /// Radius > 0.
+    /// Radius > 0 (>= 0 for lights).
     pub radius: f64,
 }
 
@@ -174,7 +176,7 @@ pub struct RectDef {
     pub center: V3,
     /// Front-side normal (need not be unit length).
     pub normal: V3,
-    /// Full edge lengths [along u, along v], each > 0.
+    /// Full edge lengths [along u, along v], each > 0 (>= 0 for lights).
     pub size: V2,
     /// Direction of the second (v) edge, projected onto the plane. Default +Y, or -Z when the
     /// normal is within 2.6° of ±Y. u = v × normal.
@@ -188,7 +190,7 @@ pub struct DiskDef {
     pub center: V3,
     /// Front-side normal (need not be unit length).
     pub normal: V3,
-    /// Radius > 0.
+    /// Radius > 0 (>= 0 for lights).
     pub radius: f64,
 }
 

@@ -99,6 +99,7 @@ pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<S
         instances: p.instances,
         shapes: p.shapes,
         lights: p.lights,
+        description: file.description.clone(),
         source: None,
     })
 }
@@ -309,17 +310,17 @@ impl Builder<'_> {
             material: material.unwrap_or_default(),
         };
         if let Some(s) = &def.sphere {
-            let (center, radius) = ctx.sphere(&format!("{f}.sphere"), s)?;
+            let (center, radius) = ctx.sphere(&format!("{f}.sphere"), s, false)?;
             self.parts
                 .shapes
                 .push(analytic(ShapeGeometry::Sphere { center, radius }));
         } else if let Some(r) = &def.rect {
-            let (center, u, v) = ctx.rect(&format!("{f}.rect"), r)?;
+            let (center, u, v) = ctx.rect(&format!("{f}.rect"), r, false)?;
             self.parts
                 .shapes
                 .push(analytic(ShapeGeometry::Rect { center, u, v }));
         } else if let Some(d) = &def.disk {
-            let (center, normal, radius) = ctx.disk(&format!("{f}.disk"), d)?;
+            let (center, normal, radius) = ctx.disk(&format!("{f}.disk"), d, false)?;
             self.parts.shapes.push(analytic(ShapeGeometry::Disk {
                 center,
                 normal,
@@ -472,17 +473,17 @@ impl Builder<'_> {
         }
         let g = format!("{f}.{kind}");
         let kind = if let Some(r) = &def.rect {
-            let (center, u, v) = ctx.rect(&g, r)?;
+            let (center, u, v) = ctx.rect(&g, r, true)?;
             LightKind::Rect { center, u, v }
         } else if let Some(d) = &def.disk {
-            let (center, normal, radius) = ctx.disk(&g, d)?;
+            let (center, normal, radius) = ctx.disk(&g, d, true)?;
             LightKind::Disk {
                 center,
                 normal,
                 radius,
             }
         } else if let Some(s) = &def.sphere {
-            let (center, radius) = ctx.sphere(&g, s)?;
+            let (center, radius) = ctx.sphere(&g, s, true)?;
             LightKind::Sphere { center, radius }
         } else if let Some(d) = &def.dome {
             LightKind::Dome {

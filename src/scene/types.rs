@@ -22,6 +22,8 @@ pub struct Scene {
     /// Analytic shapes (traced exactly, not tessellated), in world space.
     pub shapes: Vec<AnalyticShape>,
     pub lights: Vec<Light>,
+    /// The file's free-text `description`, if any.
+    pub description: Option<String>,
     /// The scene file it came from (None for the embedded default scene).
     pub source: Option<PathBuf>,
 }

@@ -114,6 +114,11 @@ fn bad_values_give_specific_errors() {
             &["bad.json: shapes.coin.disk.radius: must be a positive finite number, got 0"],
         ),
         (
+            // Lights may have zero size (they emit nothing), but not a negative one.
+            with_lights(r#""bulb": { "sphere": { "center": [0, 3, 0], "radius": -0.5 } }"#),
+            &["bad.json: lights.bulb.sphere.radius: must be a finite number >= 0, got -0.5"],
+        ),
+        (
             with_camera(r#"{ "position": [0, 1, 5], "look_at": [0, 0, 0], "fov_y": 180 }"#),
             &["bad.json: camera.fov_y: must be in (0, 180) degrees, got 180"],
         ),
