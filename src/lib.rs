@@ -19,4 +19,5 @@ pub use error::{Error, Result};
 pub mod metrics;
 pub mod render;
 pub mod report;
+pub mod stress;
 pub mod trace;

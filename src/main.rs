@@ -33,6 +33,30 @@ enum Command {
     Bench(BenchCommand),
     /// Render a scene with several techniques for the same time and compare their error.
     Compare(CompareArgs),
+    /// Render the stress suite (scenes/stress) and write its report (docs/stress.md).
+    Stress(StressArgs),
+}
+
+#[derive(clap::Args)]
+struct StressArgs {
+    /// Directory of the stress scenes.
+    #[arg(long, default_value = "scenes/stress")]
+    scenes: PathBuf,
+    /// The Markdown report to write.
+    #[arg(short, long, default_value = "docs/stress.md")]
+    output: PathBuf,
+    /// Render time per case and trace path, in seconds.
+    #[arg(long, default_value_t = 2.0)]
+    time: f64,
+    /// Image width and height of every case.
+    #[arg(long, default_value_t = 64)]
+    size: u32,
+    /// Samples per pixel of the references rendered by a different technique.
+    #[arg(long, default_value_t = 2048)]
+    reference_spp: u32,
+    /// Device index or a substring of its name (see `illum devices`).
+    #[arg(long)]
+    device: Option<String>,
 }
 
 /// Sample counts and the direct-lighting technique.
@@ -139,6 +163,10 @@ struct RenderArgs {
     /// Enable the Vulkan validation layers.
     #[arg(long)]
     validate: bool,
+    /// Firefly clamp: scale down (keeping the hue) any camera sample whose direct lighting has a
+    /// luminance above this. Off by default; biased when on (reported as such).
+    #[arg(long)]
+    clamp: Option<f32>,
     #[command(flatten)]
     integrator: IntegratorArgs,
 }
@@ -155,6 +183,7 @@ fn run() -> Result<()> {
         Command::Render(a) => render(a),
         Command::Devices => devices(),
         Command::Compare(a) => compare(a),
+        Command::Stress(a) => stress(a),
         Command::Bench(BenchCommand::Trace(a)) => bench_trace(a),
         Command::Schema => {
             println!(
@@ -418,6 +447,7 @@ fn render(a: RenderArgs) -> Result<()> {
         trace: a.trace,
         reference,
         evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
+        clamp: a.clamp,
         ..Default::default()
     };
     let bar = if a.quiet {
@@ -443,6 +473,18 @@ fn render(a: RenderArgs) -> Result<()> {
         }
     })?;
     bar.finish_and_clear();
+    if !out.stats.dark_lights.is_empty() {
+        eprintln!(
+            "illum: note: left out lights that emit nothing (zero radiance or size): {}",
+            out.stats.dark_lights.join(", ")
+        );
+    }
+    if out.stats.emitters == 0 {
+        eprintln!(
+            "illum: warning: the scene emits no light (no light with radiance and size, no emissive \
+             geometry): the image is black apart from the dome or emission seen directly"
+        );
+    }
     let last = out.passes.last().cloned().unwrap_or_default();
     let mut extra = vec![
         ("illum.trace".to_string(), out.stats.trace.to_string()),
@@ -457,6 +499,13 @@ fn render(a: RenderArgs) -> Result<()> {
     ];
     if let Some(e) = last.estimated_relmse {
         extra.push(("illum.estimatedRelMSE".into(), format!("{e:.6e}")));
+    }
+    if let Some(c) = a.clamp {
+        extra.push(("illum.fireflyClamp".into(), format!("{c} (biased)")));
+        extra.push((
+            "illum.clampedSamples".into(),
+            out.stats.clamped_samples.to_string(),
+        ));
     }
     if let Some(e) = last.error {
         extra.push(("illum.relMSE".into(), format!("{:.6e}", e.relmse)));
@@ -554,6 +603,12 @@ fn render(a: RenderArgs) -> Result<()> {
         }
         if let Some(e) = last.estimated_relmse {
             line += &format!("; estimated relMSE {e:.4e} (half-buffers, blind to bias)");
+        }
+        if let Some(c) = a.clamp {
+            line += &format!(
+                "; BIASED: firefly clamp at luminance {c} reduced {} camera samples",
+                out.stats.clamped_samples
+            );
         }
         eprintln!("{line}");
     }
@@ -672,5 +727,33 @@ fn bench_trace(a: BenchTraceArgs) -> Result<()> {
     if !msgs.is_empty() {
         bail!("{} Vulkan validation message(s) (see above)", msgs.len());
     }
+    Ok(())
+}
+
+fn stress(a: StressArgs) -> Result<()> {
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: false,
+    })?;
+    let renderer = Renderer::new(ctx.clone());
+    let o = illum::stress::StressOptions {
+        seconds: a.time,
+        width: a.size,
+        height: a.size,
+        reference_spp: a.reference_spp,
+    };
+    let rows = illum::stress::run(&renderer, &a.scenes, &o, &mut |r| {
+        eprintln!(
+            "illum stress: {:<24} {:<9} {:>7} spp  relMSE {:.2e}  non-finite {}  mean ratio {:.5} (z {:+.1})",
+            r.case, r.trace, r.spp, r.relmse, r.non_finite_samples, r.mean_ratio, r.z
+        )
+    })?;
+    let command = format!(
+        "illum stress --time {} --size {} --reference-spp {}",
+        a.time, a.size, a.reference_spp
+    );
+    let md = illum::stress::markdown(&rows, &o, &ctx.info().name, &command);
+    std::fs::write(&a.output, md).with_context(|| format!("writing {}", a.output.display()))?;
+    eprintln!("illum stress: wrote {}", a.output.display());
     Ok(())
 }

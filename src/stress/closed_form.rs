@@ -1,0 +1,560 @@
+//! Closed-form reference images, in float64 on the host, for scenes whose answer is known: one
+//! plane of receivers (rects and mesh triangles, all coplanar, Lambert plus optional mirror-like
+//! lobes) lit, without occlusion, by lights on its front side. Each pixel averages S×S stratified
+//! positions of the box pixel filter that `primary.comp` integrates.
+//!
+//! Irradiance formulas (TECHNIQUES.md §5): sphere and sun cone by Snyder's formula with the horizon
+//! crossing (§5.3); rects and emissive triangles by the Lambert polygon formula (§5.4, polygons
+//! wholly above the receiver's horizon); a delta sun as E⊥ max(0, n·s); a constant dome as π L; a
+//! textured dome by Gauss-Legendre quadrature over the cells of its bilinear interpolant. These are
+//! independent of the GLSL (which samples; it never evaluates these integrals for the image).
+//!
+//! Anything outside that class is an error that names what is unsupported, so a closed form is
+//! never silently wrong.
+
+use crate::scene::{Distribution, Fresnel, LightKind, Scene, ShapeGeometry, SpecularLobe, Texture};
+use glam::{DVec2, DVec3};
+use std::f64::consts::PI;
+
+/// Positions per pixel along each axis.
+const SUBPIXELS: u32 = 8;
+/// Below this alpha along both axes a lobe is a mirror (the renderer's MF_DELTA_ALPHA), and at
+/// most this its directional albedo under a constant dome differs from F by < 2e-5 for
+/// n·v >= 0.2 (GGX Smith: Λ ≈ α² tan²θ / 4); the D-BRDF has no shadowing term, its albedo is F
+/// while the reflected lobe stays above the horizon (exp(-cot²θ / α²) ≈ 0).
+const MIRROR_ALPHA: f32 = 1e-3;
+
+struct Receiver {
+    /// Polygon corners (world space, counter-clockwise seen from the front).
+    corners: Vec<DVec3>,
+    diffuse: DVec3,
+    /// Constant Fresnel of mirror-like lobes (summed).
+    mirror: DVec3,
+}
+
+struct Plane {
+    n: DVec3,
+    d: f64,
+}
+
+/// The image of `scene` at its camera's resolution, row-major RGB.
+pub fn image(scene: &Scene) -> Result<Vec<[f32; 3]>, String> {
+    let setup = Setup::new(scene)?;
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let forward = (cam.look_at - cam.position).normalize();
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let tan_half = (cam.fov_y_deg.to_radians() * 0.5).tan();
+    let aspect = f64::from(w) / f64::from(h);
+    let (right, up) = (right * tan_half * aspect, up * tan_half);
+    let mut out = Vec::with_capacity((w * h) as usize);
+    let s = f64::from(SUBPIXELS);
+    for y in 0..h {
+        for x in 0..w {
+            let mut acc = DVec3::ZERO;
+            for j in 0..SUBPIXELS {
+                for i in 0..SUBPIXELS {
+                    let u = (f64::from(x) + (f64::from(i) + 0.5) / s) / f64::from(w);
+                    let v = (f64::from(y) + (f64::from(j) + 0.5) / s) / f64::from(h);
+                    let (nx, ny) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+                    let d = (forward + nx * right - ny * up).normalize();
+                    acc += setup.radiance(cam.position, d)?;
+                }
+            }
+            let p = acc / (s * s);
+            out.push([p.x as f32, p.y as f32, p.z as f32]);
+        }
+    }
+    Ok(out)
+}
+
+struct Setup<'a> {
+    scene: &'a Scene,
+    receivers: Vec<Receiver>,
+    plane: Plane,
+    /// Emissive triangles (world corners, radiance, two-sided).
+    emitters: Vec<([DVec3; 3], DVec3, bool)>,
+    /// Constant radiance of an untextured dome, or the textured dome's irradiance on the plane.
+    dome_constant: Option<DVec3>,
+    dome_irradiance: DVec3,
+    dome_visible: bool,
+}
+
+fn v3(v: glam::Vec3) -> DVec3 {
+    v.as_dvec3()
+}
+
+impl<'a> Setup<'a> {
+    fn new(scene: &'a Scene) -> Result<Setup<'a>, String> {
+        let mut receivers = Vec::new();
+        let mut emitters = Vec::new();
+        let material = |m: u32, what: &str| -> Result<Option<(DVec3, DVec3)>, String> {
+            let m = &scene.materials[m as usize];
+            if m.emission.max_element() > 0.0 {
+                return Ok(None);
+            }
+            if m.diffuse_texture.is_some() || m.metallic_roughness.is_some() {
+                return Err(format!("{what}: textured or glTF material"));
+            }
+            let mut mirror = DVec3::ZERO;
+            for l in &m.specular {
+                mirror += mirror_lobe(l).ok_or_else(|| {
+                    format!(
+                        "{what}: a specular lobe other than a mirror-like one with constant Fresnel"
+                    )
+                })?;
+            }
+            Ok(Some((v3(m.diffuse), mirror)))
+        };
+        for s in &scene.shapes {
+            let ShapeGeometry::Rect { center, u, v } = s.geometry else {
+                return Err(format!("shape {}: only rects and meshes", s.name));
+            };
+            let Some((diffuse, mirror)) = material(s.material, &s.name)? else {
+                return Err(format!("shape {}: emissive shapes", s.name));
+            };
+            let c = center - 0.5 * u - 0.5 * v;
+            receivers.push(Receiver {
+                corners: vec![c, c + u, c + u + v, c + v],
+                diffuse,
+                mirror,
+            });
+        }
+        for inst in &scene.instances {
+            let mesh = &scene.meshes[inst.mesh as usize];
+            let p = |i: u32| {
+                inst.transform
+                    .transform_point3(mesh.positions[i as usize].as_dvec3())
+            };
+            let mat = material(mesh.material, &inst.name)?;
+            for t in mesh.indices.chunks_exact(3) {
+                let tri = [p(t[0]), p(t[1]), p(t[2])];
+                match mat {
+                    Some((diffuse, mirror)) => receivers.push(Receiver {
+                        corners: tri.to_vec(),
+                        diffuse,
+                        mirror,
+                    }),
+                    None => {
+                        let m = &scene.materials[mesh.material as usize];
+                        if m.emission_texture.is_some() {
+                            return Err(format!("{}: emission texture", inst.name));
+                        }
+                        emitters.push((tri, v3(m.emission), m.two_sided));
+                    }
+                }
+            }
+        }
+        // One plane: the normal of the largest receiver polygon.
+        let area = |c: &[DVec3]| polygon_normal(c).length();
+        let big = receivers
+            .iter()
+            .max_by(|a, b| area(&a.corners).total_cmp(&area(&b.corners)))
+            .ok_or("no receiver (rect or mesh) in the scene")?;
+        let n = polygon_normal(&big.corners).normalize();
+        let plane = Plane {
+            n,
+            d: n.dot(big.corners[0]),
+        };
+        let scale = receivers
+            .iter()
+            .flat_map(|r| r.corners.iter())
+            .fold(1.0f64, |m, p| m.max(p.abs().max_element()));
+        for r in &receivers {
+            for p in &r.corners {
+                if (n.dot(*p) - plane.d).abs() > 1e-9 * scale {
+                    return Err("receivers are not coplanar (occlusion would matter)".into());
+                }
+            }
+        }
+        let (mut dome_constant, mut dome_irradiance, mut dome_visible) = (None, DVec3::ZERO, false);
+        let mut others = 0;
+        for l in &scene.lights {
+            if l.texture.is_some() && !matches!(l.kind, LightKind::Dome { .. }) {
+                return Err(format!("light {}: textured area lights", l.name));
+            }
+            match &l.kind {
+                LightKind::Dome { rotation_deg } => {
+                    dome_visible = l.visible;
+                    match l.texture {
+                        None => dome_constant = Some(v3(l.radiance())),
+                        Some(t) => {
+                            dome_irradiance = v3(l.radiance())
+                                * dome_irradiance_quadrature(
+                                    &scene.textures[t as usize],
+                                    *rotation_deg,
+                                    n,
+                                );
+                        }
+                    }
+                }
+                LightKind::Disk { radius, .. } if *radius > 0.0 => {
+                    return Err(format!("light {}: disks", l.name));
+                }
+                _ => others += 1,
+            }
+            let dark = l.radiance().max_element() == 0.0
+                || match &l.kind {
+                    LightKind::Rect { u, v, .. } => u.cross(*v).length_squared() == 0.0,
+                    LightKind::Sphere { radius, .. } => *radius == 0.0,
+                    _ => false,
+                };
+            // The renderer leaves out lights that emit nothing, visible or not.
+            if matches!(l.kind, LightKind::Rect { .. } | LightKind::Sphere { .. })
+                && l.visible
+                && !dark
+            {
+                return Err(format!("light {}: visible area lights", l.name));
+            }
+        }
+        let has_mirror = receivers.iter().any(|r| r.mirror != DVec3::ZERO);
+        if has_mirror && (others > 0 || !emitters.is_empty() || dome_constant.is_none()) {
+            return Err("mirror-like lobes are supported under a constant dome only".into());
+        }
+        if !emitters.is_empty() && !scene.lights.is_empty() {
+            return Err(
+                "emissive geometry must be the only light (it could occlude others)".into(),
+            );
+        }
+        Ok(Setup {
+            scene,
+            receivers,
+            plane,
+            emitters,
+            dome_constant,
+            dome_irradiance,
+            dome_visible,
+        })
+    }
+
+    fn radiance(&self, o: DVec3, d: DVec3) -> Result<DVec3, String> {
+        let n = self.plane.n;
+        let dn = d.dot(n);
+        let t = (self.plane.d - n.dot(o)) / dn;
+        let background = || {
+            if !self.dome_visible {
+                return DVec3::ZERO;
+            }
+            self.dome_constant.unwrap_or(DVec3::ZERO)
+        };
+        if !(t > 0.0 && t.is_finite()) {
+            return self.miss(d, background());
+        }
+        let x = o + t * d;
+        let Some(r) = self.receivers.iter().find(|r| inside(&r.corners, n, x)) else {
+            return self.miss(d, background());
+        };
+        if dn >= 0.0 {
+            return Err("the camera sees the back of the receiver plane".into());
+        }
+        for (tri, _, _) in &self.emitters {
+            if ray_triangle(o, d, tri).is_some_and(|te| te < t) {
+                return Err("the camera sees emissive geometry".into());
+            }
+        }
+        let e = self.irradiance(x, n)?;
+        let mut l = r.diffuse * e / PI;
+        if r.mirror != DVec3::ZERO {
+            l += r.mirror * self.dome_constant.unwrap_or(DVec3::ZERO);
+        }
+        Ok(l)
+    }
+
+    fn miss(&self, d: DVec3, background: DVec3) -> Result<DVec3, String> {
+        for (tri, _, _) in &self.emitters {
+            if ray_triangle(self.scene.camera.position, d, tri).is_some() {
+                return Err("the camera sees emissive geometry".into());
+            }
+        }
+        if self.dome_visible && self.dome_constant.is_none() && self.dome_irradiance != DVec3::ZERO
+        {
+            return Err("the camera sees a textured dome".into());
+        }
+        Ok(background)
+    }
+
+    /// Irradiance at x on the receiver plane (normal n), unoccluded.
+    fn irradiance(&self, x: DVec3, n: DVec3) -> Result<DVec3, String> {
+        let mut e = self.dome_irradiance;
+        if let Some(l) = self.dome_constant {
+            e += PI * l;
+        }
+        for l in &self.scene.lights {
+            let radiance = v3(l.radiance());
+            e += match &l.kind {
+                LightKind::Sphere { center, radius } => {
+                    let q = *center - x;
+                    let d2 = q.length_squared();
+                    if d2 <= radius * radius {
+                        return Err(format!("light {}: receiver inside the sphere", l.name));
+                    }
+                    radiance * sphere_irradiance(radius * radius / d2, n.dot(q) / d2.sqrt())
+                }
+                LightKind::Sun {
+                    direction,
+                    angular_diameter_deg,
+                } => {
+                    let s = direction.normalize();
+                    let half = (angular_diameter_deg * 0.5).to_radians();
+                    if half == 0.0 {
+                        radiance * n.dot(s).max(0.0)
+                    } else {
+                        // L = E⊥ / (π sin²θs) (docs/scene-format.md).
+                        let s2 = half.sin().powi(2);
+                        radiance / (PI * s2) * sphere_irradiance(s2, n.dot(s))
+                    }
+                }
+                LightKind::Rect { center, u, v } => {
+                    let c = *center - 0.5 * *u - 0.5 * *v;
+                    let corners = [c, c + *u, c + *u + *v, c + *v];
+                    radiance * polygon_irradiance(&corners, x, n, l.two_sided, &l.name)?
+                }
+                // Disks of radius 0 (others are rejected in Setup::new) emit nothing.
+                LightKind::Dome { .. } | LightKind::Disk { .. } => DVec3::ZERO,
+            };
+        }
+        for (tri, radiance, two_sided) in &self.emitters {
+            e += *radiance * polygon_irradiance(tri, x, n, *two_sided, "emissive triangle")?;
+        }
+        Ok(e)
+    }
+}
+
+/// Constant Fresnel of a mirror-like lobe, or None.
+fn mirror_lobe(l: &SpecularLobe) -> Option<DVec3> {
+    let Fresnel::Constant(f) = l.fresnel else {
+        return None;
+    };
+    let ok = l.alpha.max_element() <= MIRROR_ALPHA
+        && matches!(l.distribution, Distribution::DBrdf | Distribution::GgxSmith);
+    ok.then(|| v3(f))
+}
+
+/// Unnormalized polygon normal (Newell): its length is twice the area.
+fn polygon_normal(c: &[DVec3]) -> DVec3 {
+    let mut n = DVec3::ZERO;
+    for i in 0..c.len() {
+        n += c[i].cross(c[(i + 1) % c.len()]);
+    }
+    n
+}
+
+/// Whether x (on the plane of the convex polygon) lies inside it.
+fn inside(c: &[DVec3], n: DVec3, x: DVec3) -> bool {
+    let pn = polygon_normal(c);
+    if pn.length_squared() == 0.0 {
+        return false;
+    }
+    let s = pn.dot(n).signum();
+    (0..c.len()).all(|i| {
+        let (a, b) = (c[i], c[(i + 1) % c.len()]);
+        s * (b - a).cross(x - a).dot(n) >= 0.0
+    })
+}
+
+fn ray_triangle(o: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<f64> {
+    let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let s = o - t[0];
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    let tt = e2.dot(q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0).then_some(tt)
+}
+
+/// E / L of a uniform spherical cap of angular radius σ (sin²σ = `s2`) whose axis makes cosθ =
+/// `ct` with the normal, the horizon crossing included (Snyder 1996; TECHNIQUES.md §5.3).
+pub fn sphere_irradiance(s2: f64, ct: f64) -> f64 {
+    if s2 == 0.0 {
+        return 0.0;
+    }
+    if ct * ct > s2 {
+        return PI * s2 * ct.max(0.0);
+    }
+    let st = (1.0 - ct * ct).max(0.0).sqrt().max(1e-12);
+    let x = (1.0 / s2 - 1.0).max(0.0).sqrt();
+    let y = (-x * ct / st).clamp(-1.0, 1.0);
+    let z = st * (1.0 - y * y).max(0.0).sqrt();
+    let atan = if x == 0.0 { PI / 2.0 } else { (z / x).atan() };
+    (ct * y.acos() - x * z) * s2 + atan
+}
+
+/// E / L of a uniform polygon (world corners) at x with normal n (Lambert 1760; TECHNIQUES §5.4).
+/// The polygon must lie wholly above the horizon of x; it emits toward its normal only unless
+/// `two_sided`.
+pub fn polygon_irradiance(
+    corners: &[DVec3],
+    x: DVec3,
+    n: DVec3,
+    two_sided: bool,
+    what: &str,
+) -> Result<f64, String> {
+    let pn = polygon_normal(corners);
+    if pn.length_squared() == 0.0 {
+        return Ok(0.0); // zero area: emits nothing
+    }
+    if !two_sided && pn.dot(x - corners[0]) <= 0.0 {
+        return Ok(0.0); // x is behind a one-sided emitter
+    }
+    let w: Vec<DVec3> = corners.iter().map(|c| (*c - x).normalize()).collect();
+    if w.iter().any(|w| n.dot(*w) < 0.0) {
+        return Err(format!("{what}: crosses the receiver's horizon"));
+    }
+    let mut sum = 0.0;
+    for i in 0..w.len() {
+        let (a, b) = (w[i], w[(i + 1) % w.len()]);
+        let c = a.cross(b);
+        let len = c.length();
+        if len > 0.0 {
+            sum += len.atan2(a.dot(b)) * n.dot(c / len);
+        }
+    }
+    Ok(0.5 * sum.abs())
+}
+
+/// ∫ T(ω) max(0, n·ω) dω of a lat-long texture T as the renderer reads it (bilinear with wrapping,
+/// `direction_to_latlong` of common.glsl), by 6-point Gauss-Legendre on every cell between texel
+/// centres, where T is bilinear. Returns RGB.
+pub fn dome_irradiance_quadrature(t: &Texture, rotation_deg: f64, n: DVec3) -> DVec3 {
+    const X: [f64; 6] = [
+        -0.932_469_514_203_152,
+        -0.661_209_386_466_264_5,
+        -0.238_619_186_083_196_9,
+        0.238_619_186_083_196_9,
+        0.661_209_386_466_264_5,
+        0.932_469_514_203_152,
+    ];
+    const W: [f64; 6] = [
+        0.171_324_492_379_170_3,
+        0.360_761_573_048_138_6,
+        0.467_913_934_572_691,
+        0.467_913_934_572_691,
+        0.360_761_573_048_138_6,
+        0.171_324_492_379_170_3,
+    ];
+    let (w, h) = (t.width as i64, t.height as i64);
+    let texel = |i: i64, j: i64| {
+        let (i, j) = (i.rem_euclid(w), j.rem_euclid(h));
+        t.texels[(j * w + i) as usize].truncate().as_dvec3()
+    };
+    let (c, s) = {
+        let r = rotation_deg.to_radians();
+        (r.cos(), r.sin())
+    };
+    let mut e = DVec3::ZERO;
+    // Cells in st = uv·size - 1/2 between integer lattice points, cut at the image border.
+    for cj in -1..h {
+        for ci in -1..w {
+            let (s0, s1) = ((ci as f64).max(-0.5), ((ci + 1) as f64).min(w as f64 - 0.5));
+            let (t0, t1) = ((cj as f64).max(-0.5), ((cj + 1) as f64).min(h as f64 - 0.5));
+            let corners = [
+                texel(ci, cj),
+                texel(ci + 1, cj),
+                texel(ci, cj + 1),
+                texel(ci + 1, cj + 1),
+            ];
+            if corners.iter().all(|c| *c == DVec3::ZERO) {
+                continue;
+            }
+            for (xa, wa) in X.iter().zip(W) {
+                for (xb, wb) in X.iter().zip(W) {
+                    let st = DVec2::new(
+                        s0 + (s1 - s0) * 0.5 * (xa + 1.0),
+                        t0 + (t1 - t0) * 0.5 * (xb + 1.0),
+                    );
+                    let f = st - DVec2::new(ci as f64, cj as f64);
+                    let value = corners[0] * (1.0 - f.x) * (1.0 - f.y)
+                        + corners[1] * f.x * (1.0 - f.y)
+                        + corners[2] * (1.0 - f.x) * f.y
+                        + corners[3] * f.x * f.y;
+                    let (u, v) = ((st.x + 0.5) / w as f64, (st.y + 0.5) / h as f64);
+                    let (phi, theta) = (2.0 * PI * (u - 0.5), PI * v);
+                    let r = DVec3::new(
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                        -theta.sin() * phi.cos(),
+                    );
+                    let dir = DVec3::new(c * r.x + s * r.z, r.y, -s * r.x + c * r.z);
+                    let jac = theta.sin() * (2.0 * PI / w as f64) * (PI / h as f64);
+                    let area = 0.25 * (s1 - s0) * (t1 - t0) * wa * wb;
+                    e += value * n.dot(dir).max(0.0) * jac * area;
+                }
+            }
+        }
+    }
+    e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Snyder's formula against brute-force quadrature over the cap, horizon crossing included.
+    #[test]
+    fn sphere_irradiance_matches_quadrature() {
+        for &(sigma_deg, theta_deg) in &[(5.0, 30.0), (20.0, 80.0), (40.0, 95.0), (60.0, 60.0)] {
+            let (sigma, theta): (f64, f64) =
+                (f64::to_radians(sigma_deg), f64::to_radians(theta_deg));
+            let axis = DVec3::new(theta.sin(), 0.0, theta.cos());
+            let (t, b) = axis.any_orthonormal_pair();
+            let n = 2000;
+            let mut sum = 0.0;
+            for i in 0..n {
+                let om = (1.0 - sigma.cos()) * (i as f64 + 0.5) / n as f64;
+                let ct = 1.0 - om;
+                let st = (1.0 - ct * ct).sqrt();
+                for k in 0..n {
+                    let phi = 2.0 * PI * (k as f64 + 0.5) / n as f64;
+                    let w = axis * ct + (t * phi.cos() + b * phi.sin()) * st;
+                    sum += w.z.max(0.0);
+                }
+            }
+            let quad = sum * 2.0 * PI * (1.0 - sigma.cos()) / (n * n) as f64;
+            let exact = sphere_irradiance(sigma.sin().powi(2), theta.cos());
+            assert!(
+                (exact - quad).abs() < 1e-5 * quad.max(1e-3),
+                "{sigma_deg} {theta_deg}: {exact} vs {quad}"
+            );
+        }
+    }
+
+    /// The polygon formula gives the sphere-cap-free known values: a unit square at height 1
+    /// centred above the point, and a tiny square whose E/L tends to A cos / d².
+    #[test]
+    fn polygon_irradiance_known_values() {
+        let sq = |h: f64, a: f64| {
+            [
+                DVec3::new(-a, -a, h),
+                DVec3::new(-a, a, h),
+                DVec3::new(a, a, h),
+                DVec3::new(a, -a, h),
+            ]
+        };
+        // Square of half-side a at height h, centred: E/L = 4 q atan(q), q = X / sqrt(1 + X²),
+        // X = a / h (four corner rectangles of the parallel-rectangle view factor).
+        let (a, h): (f64, f64) = (1.0, 1.0);
+        let x = a / h;
+        let q = x / (1.0 + x * x).sqrt();
+        let ff = 4.0 * q * q.atan();
+        let e = polygon_irradiance(&sq(h, a), DVec3::ZERO, DVec3::Z, false, "t").unwrap();
+        assert!((e - ff).abs() < 1e-12, "{e} vs {ff}");
+        let tiny = polygon_irradiance(&sq(1e5, 5e3), DVec3::ZERO, DVec3::Z, true, "t").unwrap();
+        let approx = 1e8 / 1e10; // A / d² (cos = 1)
+        assert!((tiny / approx - 1.0).abs() < 5e-3, "{tiny}");
+        // Behind a one-sided emitter whose normal points up (+z): nothing.
+        let mut up = sq(1.0, 1.0);
+        up.reverse();
+        assert_eq!(
+            polygon_irradiance(&up, DVec3::ZERO, DVec3::Z, false, "t").unwrap(),
+            0.0
+        );
+        let two = polygon_irradiance(&up, DVec3::ZERO, DVec3::Z, true, "t").unwrap();
+        assert!((two - ff).abs() < 1e-12);
+    }
+}
