@@ -23,14 +23,12 @@ void main() {
         Hit h = trace_closest(vec3(0.0), d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
         g_rays += 1u;
         vec3 beauty = vec3(0.0);
+        vec3 le = vec3(0.0);   // emission seen directly
         if (h.kind == HIT_NONE) {
-            beauty = dome_radiance(d);
-            acc.emission.rgb += beauty;
+            le = dome_radiance(d);
         } else {
             Surface s = surface_at(h, vec3(0.0), d);
-            vec3 le = surface_emission(s, d);
-            beauty = le;
-            acc.emission.rgb += le;
+            le = surface_emission(s, d);
             acc.normal += vec4(s.ns, h.t);
             if (s.material != NONE) {
                 GpuMaterial m = get_material(s.material);
@@ -49,10 +47,19 @@ void main() {
                 acc.albedo.w += 1.0;
             }
         }
+        beauty += le;
+        // Test hook (RenderSettings::inject_non_finite): every n-th sample of each pixel is NaN,
+        // so that tests can check the accounting below end to end.
+        uint inject = floatBitsToUint(frame.film_params.y);
+        if (inject != 0u && (pc.first_sample + k) % inject == 0u) beauty.g = uintBitsToFloat(0x7fc00000u);
+        // The one place where non-finite sample values are counted, before anything accumulates
+        // them; the sample then counts as 0 in the beauty and the emission AOV.
         if (non_finite(beauty)) {
             acc.emission.w += 1.0;
             beauty = vec3(0.0);
+            le = vec3(0.0);
         }
+        acc.emission.rgb += le;
         acc.beauty.rgb += beauty;
         acc.beauty_sq.rgb += beauty * beauty;
         if (((pc.first_sample + k) & 1u) == 1u) acc.beauty_odd.rgb += beauty;

@@ -197,3 +197,49 @@ fn firefly_clamp_is_off_by_default_and_counted_when_on() {
     assert!(bad.is_err_and(|e| e.to_string().contains("--clamp")));
     assert_no_validation_messages(&ctx);
 }
+
+/// Non-finite samples are counted at one place and kept out of the image: with every third
+/// sample made NaN (the test hook), the count is exact and each such sample counts as 0, so the
+/// image stays finite and its mean is 2/3 of the clean one.
+#[test]
+fn non_finite_samples_are_counted_and_kept_out_of_the_image() {
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
+    let case = CASES.iter().find(|c| c.name == "sun-delta").unwrap();
+    let mut scene = case.load(&dir).unwrap();
+    scene.camera.width = 8;
+    scene.camera.height = 4;
+    let settings = RenderSettings {
+        spp: 9,
+        trace: trace_mode(),
+        inject_non_finite: 3,
+        ..Default::default()
+    };
+    let out = renderer.render(&scene, &settings, &mut |_, _| {}).unwrap();
+    // Samples 0, 3 and 6 of each of the 32 pixels.
+    assert_eq!(out.stats.non_finite_samples, 3 * 32);
+    let clean = renderer
+        .render(
+            &scene,
+            &RenderSettings {
+                inject_non_finite: 0,
+                ..settings
+            },
+            &mut |_, _| {},
+        )
+        .unwrap();
+    assert_eq!(clean.stats.non_finite_samples, 0);
+    for (a, b) in out.film.beauty.iter().zip(&clean.film.beauty) {
+        for c in 0..3 {
+            assert!(a[c].is_finite());
+            // A delta sun on a plane: every sample has nearly the same value, so dropping a
+            // third of them scales the mean by 2/3.
+            assert!(
+                (a[c] - b[c] * 2.0 / 3.0).abs() <= 1e-3 * b[c],
+                "{a:?} vs {b:?}"
+            );
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}

@@ -124,11 +124,16 @@ vec3 cosine_hemisphere(vec2 u) {
 
 // Ray origin offset off a surface (Waechter & Binder 2019, Ray Tracing Gems ch. 6): integer ULPs
 // along the geometric normal, which scales with the magnitude of p; a float offset near the origin.
+// Deviation from the paper: every nonzero normal component moves its coordinate by at least 4 ulp.
+// Truncating 256 n_i to 0 for |n_i| < 1/256 left the rounding error of a large coordinate (projected
+// on n: |n_i| ulp/2) uncovered when the other coordinates are small: a plane with n = (0.003, 0, 1)
+// through (6e4, 4e3, 0.085) had correctly rounded hit points whose rays re-hit it
+// (tests/stable.rs offset_ray_origin_avoids_self_intersection).
 vec3 offset_ray_origin(vec3 p, vec3 ng) {
     const float origin = 1.0 / 32.0;
     const float float_scale = 1.0 / 65536.0;
     const float int_scale = 256.0;
-    ivec3 of_i = ivec3(int_scale * ng);
+    ivec3 of_i = ivec3(sign(ng) * max(int_scale * abs(ng), 4.0));
     vec3 p_i = vec3(
         intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
         intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),

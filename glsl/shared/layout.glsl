@@ -122,7 +122,8 @@ struct Frame {
     uint64_t light_refs;      // uint array: light indices in leaf order, then the infinite lights
     uvec4 light_bvh;          // node count, first infinite ref, infinite light count, unused
     vec4 film_params;         // x: firefly clamp, the most luminance of one camera sample's direct
-                              // lighting (0: off; biased when on); yzw unused
+                              // lighting (0: off; biased when on); y: bits of a uint n, test hook:
+                              // every n-th sample is NaN (0: off); zw unused
 };
 
 // Per-dispatch constants.

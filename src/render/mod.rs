@@ -105,6 +105,10 @@ pub struct RenderSettings {
     /// Firefly clamp: the most luminance one camera sample's direct lighting may have (scaled
     /// down, hue kept, above it). None: off, the default. It biases the image (TECHNIQUES 7.6).
     pub clamp: Option<f32>,
+    /// Test hook: make every n-th sample of each pixel NaN (0: off), to check that non-finite
+    /// samples are counted and kept out of the image.
+    #[doc(hidden)]
+    pub inject_non_finite: u32,
 }
 
 impl Default for RenderSettings {
@@ -119,6 +123,7 @@ impl Default for RenderSettings {
             reference: None,
             evaluate_passes: false,
             clamp: None,
+            inject_non_finite: 0,
         }
     }
 }
@@ -246,6 +251,7 @@ impl Renderer {
             }
             gpu.frame.film_params[0] = c;
         }
+        gpu.frame.film_params[1] = f32::from_bits(settings.inject_non_finite);
         let upload_seconds = t0.elapsed().as_secs_f64();
         let trace = TraceStructure::build(ctx, &gpu, mode)?;
         let build = trace.build_stats().clone();
