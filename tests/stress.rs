@@ -11,15 +11,13 @@
 mod common;
 use common::*;
 use illum::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
-use illum::stress::{CASES, Case, Reference, mean_luminance};
+use illum::stress::{CASES, Case, FLOAT_FLOOR, Reference, mean_luminance};
 use illum::trace::TraceMode;
 use std::path::Path;
 
 const SIZE: u32 = 24;
 const SPP: u32 = 128;
 const REFERENCE_SPP: u32 = 512;
-/// float32 accumulation and rounding: a relative floor under the standard error.
-const FLOAT_FLOOR: f64 = 1e-5;
 
 fn run_case(name: &str) {
     let case: &Case = CASES.iter().find(|c| c.name == name).expect("case listed");
@@ -241,5 +239,32 @@ fn non_finite_samples_are_counted_and_kept_out_of_the_image() {
             );
         }
     }
+    assert_no_validation_messages(&ctx);
+}
+
+/// Long renders stay exact: a delta sun on a plane has (nearly) zero variance, so the image mean
+/// after 32768 samples per pixel must match the closed form to float32 rounding. Adding every
+/// sample to the film's running sum read 3.2e-4 low here; partial sums per dispatch read 7e-6.
+#[test]
+fn film_sums_stay_exact_over_many_samples() {
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
+    let case = CASES.iter().find(|c| c.name == "sun-delta").unwrap();
+    let mut scene = case.load(&dir).unwrap();
+    scene.camera.width = 8;
+    scene.camera.height = 8;
+    let reference = case.reference(&renderer, &scene, 1).unwrap();
+    let (expected, _) = mean_luminance(&reference.image, None);
+    let settings = RenderSettings {
+        spp: 32768,
+        trace: trace_mode(),
+        ..Default::default()
+    };
+    let out = renderer.render(&scene, &settings, &mut |_, _| {}).unwrap();
+    let (mean, _) = mean_luminance(&out.film.beauty, None);
+    let rel = mean / expected - 1.0;
+    eprintln!("relative error of the mean at 32768 spp: {rel:.2e}");
+    assert!(rel.abs() < 3e-5, "{rel:.3e}");
     assert_no_validation_messages(&ctx);
 }
