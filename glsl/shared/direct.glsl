@@ -80,6 +80,22 @@ GpuDomeSampling dome_sampling() {
 }
 
 // Emitted radiance of light l toward the shading point, at light-surface coordinates uv.
+// Texture coordinates of a point of a triangle light, from its barycentrics (b1, b2) and the
+// mesh's vertex uvs, as surface_at interpolates them for camera rays (so that an emissive mesh
+// looks the same seen directly and as a light).
+vec2 triangle_light_texcoord(GpuLight l, vec2 bc) {
+    if (!has_feature(FEATURE_MESHES)) return vec2(0.0);
+    GpuInstance inst = get_instance(l.shape);
+    if ((inst.flags & INSTANCE_FLAG_UVS) == 0u) return vec2(0.0);
+    IndexRef indices = IndexRef(frame.indices);
+    VertexRef vertices = VertexRef(frame.vertices);
+    uint base = inst.first_index + 3u * floatBitsToUint(l.p1.w);
+    GpuVertex v0 = vertices.v[inst.first_vertex + indices.v[base]];
+    GpuVertex v1 = vertices.v[inst.first_vertex + indices.v[base + 1u]];
+    GpuVertex v2 = vertices.v[inst.first_vertex + indices.v[base + 2u]];
+    return (1.0 - bc.x - bc.y) * vec2(v0.u, v0.v) + bc.x * vec2(v1.u, v1.v) + bc.y * vec2(v2.u, v2.v);
+}
+
 vec3 light_radiance(GpuLight l, vec2 uv, bool delta) {
     if (l.kind == LIGHT_SUN) {
         // The sun's E_perp spread over its cone: L = E / (pi sin^2 theta_s); a delta sun gives E.
@@ -87,8 +103,10 @@ vec3 light_radiance(GpuLight l, vec2 uv, bool delta) {
         float om = l.p1.x;
         return l.radiance / (PI * om * (2.0 - om));
     }
-    // Triangle lights ignore emission textures (their uv would need the mesh's vertex uvs).
-    if (l.kind == LIGHT_TRIANGLE) return l.radiance;
+    if (l.kind == LIGHT_TRIANGLE) {
+        if (l.texture == NONE) return l.radiance;
+        uv = triangle_light_texcoord(l, uv);
+    }
     return l.radiance * texture_lookup(l.texture, uv).rgb;
 }
 
