@@ -289,10 +289,17 @@ Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
     sh.ng = dot(s.ng, d) > 0.0 ? -s.ng : s.ng;
     sh.n = dot(s.ns, sh.ng) < 0.0 ? -s.ns : s.ns;
     sh.origin = offset_ray_origin(s.p, sh.ng);
-    // Tangent: the material's direction projected on the tangent plane, else around +Y (so that
-    // anisotropic spheres are brushed along latitudes), else any.
-    vec3 dir = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u ? m.tangent_dir : vec3(0.0, 1.0, 0.0);
-    vec3 t = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u ? dir - sh.n * dot(sh.n, dir) : cross(dir, sh.n);
+    // Tangent: the mesh's, else the material's direction, each projected on the tangent plane;
+    // else around +Y (so that anisotropic spheres are brushed along latitudes); else any. The
+    // bitangent's handedness is not needed: the distributions are even in the bitangent.
+    bool directed = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u;
+    vec3 dir = directed ? m.tangent_dir : vec3(0.0, 1.0, 0.0);
+    vec3 t = directed ? dir - sh.n * dot(sh.n, dir) : cross(dir, sh.n);
+    if (dot(s.tangent, s.tangent) > 0.0) {
+        vec3 tn = normalize(s.tangent);
+        vec3 tm = tn - sh.n * dot(sh.n, tn);
+        if (dot(tm, tm) > 1e-8) t = tm;
+    }
     if (dot(t, t) < 1e-8) {
         vec3 b;
         make_basis(sh.n, t, b);

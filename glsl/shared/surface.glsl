@@ -10,6 +10,7 @@ struct Surface {
     vec3 ng;         // geometric normal (winding / shape outward side), unit
     vec3 ns;         // shading normal, unit, same hemisphere as ng
     vec2 uv;
+    vec3 tangent;    // world-space mesh tangent (interpolated, not unit), or 0 where there is none
     uint material;   // NONE for light shapes
     uint light;      // NONE unless the surface is a light's
 };
@@ -21,6 +22,7 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     Surface s;
     s.light = NONE;
     s.uv = vec2(0.0);
+    s.tangent = vec3(0.0);
     if (has_feature(FEATURE_MESHES) && h.kind == HIT_TRIANGLE) {
         GpuInstance inst = get_instance(h.instance);
         IndexRef indices = IndexRef(frame.indices);
@@ -46,6 +48,9 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         }
         if ((inst.flags & INSTANCE_FLAG_UVS) != 0u)
             s.uv = b.x * vec2(v0.u, v0.v) + b.y * vec2(v1.u, v1.v) + b.z * vec2(v2.u, v2.v);
+        // Tangents transform as vectors (they lie in the surface), not as normals.
+        if ((inst.flags & INSTANCE_FLAG_TANGENTS) != 0u)
+            s.tangent = xform_vector(inst.object_to_world, b.x * v0.tangent.xyz + b.y * v1.tangent.xyz + b.z * v2.tangent.xyz);
         s.material = inst.material;
     } else {
         GpuShape sh = get_shape(h.prim);

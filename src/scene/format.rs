@@ -206,6 +206,9 @@ pub struct MeshDef {
     pub normals: Option<Vec<V3>>,
     /// Per-vertex texture coordinates (one per position).
     pub uvs: Option<Vec<V2>>,
+    /// Per-vertex tangents [x, y, z, w] (one per position; xyz non-zero, w = ±1 the bitangent's
+    /// handedness, as glTF's TANGENT): the anisotropy direction, before the material's `tangent`.
+    pub tangents: Option<Vec<[f64; 4]>>,
 }
 
 /// A glTF 2.0 file (.gltf or .glb).

@@ -405,6 +405,26 @@ impl Builder<'_> {
                 Some(out)
             }
         };
+        let tangents = match &m.tangents {
+            None => None,
+            Some(tangents) => {
+                per_vertex("tangents", tangents.len())?;
+                let mut out = Vec::with_capacity(n);
+                for (i, t) in tangents.iter().enumerate() {
+                    let field = format!("{f}.tangents[{i}]");
+                    let xyz = ctx.direction(&field, [t[0], t[1], t[2]])?.as_vec3();
+                    if t[3] != 1.0 && t[3] != -1.0 {
+                        return Err(ctx.err(
+                            field,
+                            fmt_vec(t),
+                            "w (the handedness) must be 1 or -1",
+                        ));
+                    }
+                    out.push(xyz.extend(t[3] as f32));
+                }
+                Some(out)
+            }
+        };
         let indices = match &m.indices {
             None if n % 3 != 0 => {
                 return Err(ctx.err(
@@ -436,7 +456,7 @@ impl Builder<'_> {
             name: name.to_owned(),
             positions,
             normals,
-            tangents: None,
+            tangents,
             uvs,
             indices,
             material,

@@ -114,6 +114,14 @@ fn bad_values_give_specific_errors() {
             &["bad.json: shapes.coin.disk.radius: must be a positive finite number, got 0"],
         ),
         (
+            with_shapes(
+                r#""tri": { "mesh": { "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "tangents": [[1, 0, 0, 1], [1, 0, 0, 1], [1, 0, 0, 0.5]] }, "material": "grey" }"#,
+            ),
+            &[
+                "bad.json: shapes.tri.mesh.tangents[2]: w (the handedness) must be 1 or -1, got [1, 0, 0, 0.5]",
+            ],
+        ),
+        (
             // Lights may have zero size (they emit nothing), but not a negative one.
             with_lights(r#""bulb": { "sphere": { "center": [0, 3, 0], "radius": -0.5 } }"#),
             &["bad.json: lights.bulb.sphere.radius: must be a finite number >= 0, got -0.5"],
