@@ -14,9 +14,9 @@ void main() {
     uvec2 pix = local + pc.tile.xy;
     uint width = frame.size.x, height = frame.size.y;
     uint pixel = pix.y * width + pix.x;
-    // Samples of this dispatch are summed from zero and added to the film once: adding each
-    // sample to a large running sum in float32 rounds systematically (a sun-lit plane at 1257 spp
-    // read 1e-5 low), while a few hundred samples per dispatch keep the partial sums small.
+    // Samples of this dispatch are summed from zero and added to the film once; the host moves
+    // the film into float64 sums every 256 samples per pixel (src/render/film.rs). Adding each
+    // sample to a long running sum in float32 rounds systematically.
     FilmPixel acc = FilmPixel(vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
     for (uint k = 0u; k < pc.sample_count; ++k) {
         Rng rng = rng_init(pc.seed_lo, pc.seed_hi, pixel, pc.first_sample + k);

@@ -255,3 +255,23 @@ fn exr_has_the_aov_layers_and_metadata() {
     assert!(img.attribute("illum.seed").is_some());
     std::fs::remove_file(&path).ok();
 }
+
+/// The loop-limiter probe (src/render/probe.rs) finds the cap of Debian's stock Mesa 22.3
+/// lavapipe, which would silently drop samples of long dispatches, and none on Mesa 25.
+#[test]
+fn loop_limiter_probe_knows_the_drivers() {
+    let ctx = context();
+    let renderer = illum::render::Renderer::new(ctx.clone());
+    let limited = renderer.loop_limited().unwrap();
+    let driver = ctx.info().driver.clone();
+    eprintln!("{driver}: loops capped: {limited}");
+    if ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE {
+        if driver.contains("Mesa 22.") {
+            assert!(limited, "{driver}");
+        }
+        if driver.contains("Mesa 25.") {
+            assert!(!limited, "{driver}");
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}

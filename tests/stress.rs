@@ -243,8 +243,10 @@ fn non_finite_samples_are_counted_and_kept_out_of_the_image() {
 }
 
 /// Long renders stay exact: a delta sun on a plane has (nearly) zero variance, so the image mean
-/// after 32768 samples per pixel must match the closed form to float32 rounding. Adding every
-/// sample to the film's running sum read 3.2e-4 low here; partial sums per dispatch read 7e-6.
+/// after 16384 samples per pixel must match the closed form to float32 rounding. Adding every
+/// sample to the film's float32 running sum read 3.5e-5 low after 4096 samples and 3.2e-4 after
+/// 32768 (measured); now the GPU sums at most 256 samples per pixel before the host moves them
+/// into float64. On drivers that cap loops (one sample per dispatch, src/render/probe.rs) too.
 #[test]
 fn film_sums_stay_exact_over_many_samples() {
     let ctx = context();
@@ -257,14 +259,14 @@ fn film_sums_stay_exact_over_many_samples() {
     let reference = case.reference(&renderer, &scene, 1).unwrap();
     let (expected, _) = mean_luminance(&reference.image, None);
     let settings = RenderSettings {
-        spp: 32768,
+        spp: 16384,
         trace: trace_mode(),
         ..Default::default()
     };
     let out = renderer.render(&scene, &settings, &mut |_, _| {}).unwrap();
     let (mean, _) = mean_luminance(&out.film.beauty, None);
     let rel = mean / expected - 1.0;
-    eprintln!("relative error of the mean at 32768 spp: {rel:.2e}");
+    eprintln!("relative error of the mean at 16384 spp: {rel:.2e}");
     assert!(rel.abs() < 3e-5, "{rel:.3e}");
     assert_no_validation_messages(&ctx);
 }

@@ -10,6 +10,7 @@ pub mod dome;
 mod film;
 mod lights;
 mod primary;
+mod probe;
 mod upload;
 
 pub use film::Resolved;
@@ -175,13 +176,32 @@ pub struct RenderOutput {
     pub passes: Vec<PassReport>,
 }
 
+/// Most samples one invocation takes per dispatch: keeps float32 partial sums small and every
+/// dispatch short (desktop watchdogs).
+const MAX_SAMPLES_PER_INVOCATION: u32 = 256;
+
 pub struct Renderer {
     ctx: Context,
+    /// Whether the driver caps loop iterations (see `probe`), found at the first render.
+    loop_limited: std::sync::OnceLock<bool>,
 }
 
 impl Renderer {
     pub fn new(ctx: Context) -> Renderer {
-        Renderer { ctx }
+        Renderer {
+            ctx,
+            loop_limited: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// Whether the driver ends loops early (older llvmpipe), so that each dispatch must take one
+    /// sample per pixel.
+    pub fn loop_limited(&self) -> Result<bool> {
+        if let Some(&l) = self.loop_limited.get() {
+            return Ok(l);
+        }
+        let l = probe::loop_limited(&self.ctx)?;
+        Ok(*self.loop_limited.get_or_init(|| l))
     }
 
     pub fn context(&self) -> &Context {
@@ -298,8 +318,15 @@ impl Renderer {
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows.
         const TILE: u32 = 512;
         let tile_pixels = u64::from(w.min(TILE)) * u64::from(h.min(TILE));
-        let per_dispatch = (settings.samples_per_submit / tile_pixels).max(1) as u32;
+        let per_dispatch = if self.loop_limited()? {
+            1
+        } else {
+            (settings.samples_per_submit / tile_pixels)
+                .clamp(1, u64::from(MAX_SAMPLES_PER_INVOCATION)) as u32
+        };
         let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
+        let mut host = film::HostFilm::new(pixels as usize);
+        let mut since_flush = 0u32;
         let mut passes = Vec::new();
         let mut last = None;
         while done < settings.spp {
@@ -343,6 +370,11 @@ impl Renderer {
                     }
                 }
                 k += n;
+                since_flush += n;
+                if since_flush >= MAX_SAMPLES_PER_INVOCATION {
+                    host.flush(ctx, &film)?;
+                    since_flush = 0;
+                }
                 progress(done + k, settings.spp);
             }
             done += pass;
@@ -359,7 +391,9 @@ impl Renderer {
                 ..Default::default()
             };
             if evaluate {
-                let r = film::download_and_resolve(ctx, &film, w, h, done)?;
+                host.flush(ctx, &film)?;
+                since_flush = 0;
+                let r = film::resolve(&host, w, h, done);
                 evaluate_pass(&mut report, &r, settings.reference.as_deref());
                 passes.push(report);
                 last = Some(r);
@@ -370,7 +404,10 @@ impl Renderer {
         }
         let resolved = match last {
             Some(r) if r.spp == done => r,
-            _ => film::download_and_resolve(ctx, &film, w, h, done)?,
+            _ => {
+                host.flush(ctx, &film)?;
+                film::resolve(&host, w, h, done)
+            }
         };
         if !evaluate && let Some(p) = passes.last_mut() {
             evaluate_pass(p, &resolved, settings.reference.as_deref());
