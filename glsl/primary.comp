@@ -14,10 +14,11 @@ void main() {
     uvec2 pix = local + pc.tile.xy;
     uint width = frame.size.x, height = frame.size.y;
     uint pixel = pix.y * width + pix.x;
-    // Samples of this dispatch are summed from zero and added to the film once; the host moves
-    // the film into float64 sums every 256 samples per pixel (src/render/film.rs). Adding each
-    // sample to a long running sum in float32 rounds systematically.
-    FilmPixel acc = FilmPixel(vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+    // The film holds float32 sums of at most 256 samples per pixel: the host moves them into
+    // float64 sums (src/render/film.rs), since long float32 running sums round systematically.
+    FilmPixel acc = film[pixel];
+    float clamp_luminance = frame.film_params.x;
+    uint inject = floatBitsToUint(frame.film_params.y);   // test hook, see below
     for (uint k = 0u; k < pc.sample_count; ++k) {
         Rng rng = rng_init(pc.seed_lo, pc.seed_hi, pixel, pc.first_sample + k);
         vec2 film_uv = (vec2(pix) + rng_next2(rng)) / vec2(width, height);
@@ -41,8 +42,8 @@ void main() {
                 // Optional firefly clamp (hue-preserving, TECHNIQUES 7.6): biased, off by default.
                 // A non-finite value fails the test and is counted below, not hidden.
                 float y = luminance(direct);
-                if (frame.film_params.x > 0.0 && y > frame.film_params.x) {
-                    direct *= frame.film_params.x / y;
+                if (clamp_luminance > 0.0 && y > clamp_luminance) {
+                    direct *= clamp_luminance / y;
                     acc.beauty.w += 1.0;
                 }
                 beauty += direct;
@@ -53,7 +54,6 @@ void main() {
         beauty += le;
         // Test hook (RenderSettings::inject_non_finite): every n-th sample of each pixel is NaN,
         // so that tests can check the accounting below end to end.
-        uint inject = floatBitsToUint(frame.film_params.y);
         if (inject != 0u && (pc.first_sample + k) % inject == 0u) beauty.g = uintBitsToFloat(0x7fc00000u);
         // The one place where non-finite sample values are counted, before anything accumulates
         // them; the sample then counts as 0 in the beauty and the emission AOV.
@@ -68,12 +68,5 @@ void main() {
         if (((pc.first_sample + k) & 1u) == 1u) acc.beauty_odd.rgb += beauty;
     }
     acc.beauty_sq.w += float(g_rays);
-    FilmPixel f = film[pixel];
-    f.beauty += acc.beauty;
-    f.beauty_sq += acc.beauty_sq;
-    f.albedo += acc.albedo;
-    f.normal += acc.normal;
-    f.emission += acc.emission;
-    f.beauty_odd += acc.beauty_odd;
-    film[pixel] = f;
+    film[pixel] = acc;
 }

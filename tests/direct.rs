@@ -8,6 +8,7 @@ mod common;
 use common::*;
 use glam::DVec3;
 use illum::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::stress::closed_form::polygon_irradiance;
 use std::f64::consts::PI;
 
 const W: u32 = 16;
@@ -140,15 +141,8 @@ fn rect_light_matches_the_polygon_formula() {
             "",
         ),
         |p| {
-            let q: Vec<DVec3> = corners.iter().map(|c| (*c - p).normalize()).collect();
-            let mut sum = 0.0;
-            for k in 0..4 {
-                let (a, b) = (q[k], q[(k + 1) % 4]);
-                let cr = a.cross(b);
-                let theta = cr.length().atan2(a.dot(b));
-                sum += theta * cr.normalize().y;
-            }
-            l * sum.abs() / 2.0
+            let rel: Vec<DVec3> = corners.iter().map(|c| *c - p).collect();
+            l * polygon_irradiance(DVec3::Y, &rel)
         },
     );
 }

@@ -9,6 +9,7 @@ mod sampling_support;
 use glam::{DVec3, Vec3, Vec4};
 use illum::layout::*;
 use illum::render::dome;
+use illum::stress::closed_form::{polygon_irradiance, sphere_irradiance};
 use sampling_support::*;
 use std::f64::consts::PI;
 
@@ -1023,50 +1024,6 @@ struct IrradianceCase {
     n: [f32; 4],
 }
 
-/// float64 E/L of a spherical cap (TECHNIQUES 5.3), the reference for spheres and suns.
-fn cap_ref(ct: f64, s2: f64) -> f64 {
-    if ct * ct >= s2 {
-        return PI * s2 * ct.max(0.0);
-    }
-    let st = (1.0 - ct * ct).sqrt().max(1e-300);
-    let x = (1.0 / s2 - 1.0).max(0.0).sqrt();
-    let y = (-x * ct / st).clamp(-1.0, 1.0);
-    let z = st * (1.0 - y * y).sqrt();
-    ((ct * y.acos() - x * z) * s2 + z.atan2(x)).max(0.0)
-}
-
-/// float64 E/L of a planar polygon (vertices relative to p), clipped at n's horizon, by Lambert's
-/// formula with exact atan2 edge angles.
-fn polygon_ref(n: DVec3, verts: &[DVec3]) -> f64 {
-    let mut clipped = Vec::new();
-    for i in 0..verts.len() {
-        let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
-        let (da, db) = (a.dot(n), b.dot(n));
-        if da >= 0.0 {
-            clipped.push(a);
-        }
-        if (da >= 0.0) != (db >= 0.0) {
-            clipped.push(a + (da / (da - db)) * (b - a));
-        }
-    }
-    if clipped.len() < 3 {
-        return 0.0;
-    }
-    let mut e = 0.0;
-    for i in 0..clipped.len() {
-        let (a, b) = (
-            clipped[i].normalize(),
-            clipped[(i + 1) % clipped.len()].normalize(),
-        );
-        let c = a.cross(b);
-        let s = c.length();
-        if s > 1e-300 {
-            e += s.atan2(a.dot(b)) * n.dot(c) / s;
-        }
-    }
-    0.5 * e.abs()
-}
-
 fn regular_polygon(c: DVec3, nd: DVec3, td: DVec3, r: f64, sides: usize) -> Vec<DVec3> {
     let bd = nd.cross(td);
     let rn = r * (2.0 * PI / (sides as f64 * (2.0 * PI / sides as f64).sin())).sqrt();
@@ -1093,7 +1050,7 @@ fn irradiance_ref(l: &GpuLight, p: DVec3, n: DVec3) -> f64 {
             if dc.length() <= r {
                 return if two { PI } else { 0.0 };
             }
-            cap_ref(n.dot(dc.normalize()), r * r / dc.length_squared())
+            sphere_irradiance(n.dot(dc.normalize()), r * r / dc.length_squared())
         }
         LIGHT_SUN => {
             let om = f64::from(l.p1[0]);
@@ -1102,7 +1059,7 @@ fn irradiance_ref(l: &GpuLight, p: DVec3, n: DVec3) -> f64 {
                 return n.dot(s).max(0.0);
             }
             let s2 = om * (2.0 - om);
-            cap_ref(n.dot(s) / s.length(), s2) / (PI * s2)
+            sphere_irradiance(n.dot(s) / s.length(), s2) / (PI * s2)
         }
         LIGHT_RECT => {
             let (c, eu, ev) = (d3(l.p0), d3(l.p1), d3(l.p2));
@@ -1110,7 +1067,7 @@ fn irradiance_ref(l: &GpuLight, p: DVec3, n: DVec3) -> f64 {
                 return 0.0;
             }
             let a = c - 0.5 * eu - 0.5 * ev - p;
-            polygon_ref(n, &[a, a + eu, a + eu + ev, a + ev])
+            polygon_irradiance(n, &[a, a + eu, a + eu + ev, a + ev])
         }
         LIGHT_TRIANGLE => {
             let (v0, e1, e2) = (d3(l.p0), d3(l.p1), d3(l.p2));
@@ -1118,7 +1075,7 @@ fn irradiance_ref(l: &GpuLight, p: DVec3, n: DVec3) -> f64 {
                 return 0.0;
             }
             let a = v0 - p;
-            polygon_ref(n, &[a, a + e1, a + e2])
+            polygon_irradiance(n, &[a, a + e1, a + e2])
         }
         LIGHT_DISK => {
             let (c, r, nd, td) = (d3(l.p0), f64::from(l.p0[3]), d3(l.p1), d3(l.p2));
@@ -1126,7 +1083,7 @@ fn irradiance_ref(l: &GpuLight, p: DVec3, n: DVec3) -> f64 {
                 return 0.0;
             }
             let v: Vec<DVec3> = regular_polygon(c - p, nd, td, r, 4096);
-            polygon_ref(n, &v)
+            polygon_irradiance(n, &v)
         }
         _ => 0.0,
     }
@@ -1432,7 +1389,7 @@ fn irradiance_matches_references() {
             let reach = r * (1.0 - n32.dot(nd).powi(2)).max(0.0).sqrt();
             if n32.dot(c - *p).abs() < reach && reference > 0.0 {
                 // Across the horizon the GPU clips a 32-gon of equal area (its error is O(1/N^2)).
-                let ngon = polygon_ref(n32, &regular_polygon(c - *p, nd, td, r, 32));
+                let ngon = polygon_irradiance(n32, &regular_polygon(c - *p, nd, td, r, 32));
                 let approx = (ngon - reference).abs();
                 eprintln!(
                     "{name}: 32-gon error {approx:.2e} ({:.2e} relative)",

@@ -19,14 +19,25 @@ const SIZE: u32 = 24;
 const SPP: u32 = 128;
 const REFERENCE_SPP: u32 = 512;
 
+fn stress_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress")
+}
+
+/// A stress case and its scene, rendered at w × h.
+fn load_case(name: &str, w: u32, h: u32) -> (&'static Case, illum::scene::Scene) {
+    let case = CASES.iter().find(|c| c.name == name).expect("case listed");
+    let mut scene = case
+        .load(&stress_dir())
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    scene.camera.width = w;
+    scene.camera.height = h;
+    (case, scene)
+}
+
 fn run_case(name: &str) {
-    let case: &Case = CASES.iter().find(|c| c.name == name).expect("case listed");
+    let (case, scene) = load_case(name, SIZE, SIZE);
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
-    let mut scene = case.load(&dir).unwrap_or_else(|e| panic!("{name}: {e}"));
-    scene.camera.width = SIZE;
-    scene.camera.height = SIZE;
     assert!(
         scene.description.as_deref().is_some_and(|d| !d.is_empty()),
         "{name}: the scene must say what is extreme"
@@ -97,8 +108,7 @@ macro_rules! cases {
             for c in CASES {
                 assert!(tested.contains(&c.name), "case {} has no test", c.name);
             }
-            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
-            for e in std::fs::read_dir(dir).unwrap() {
+            for e in std::fs::read_dir(stress_dir()).unwrap() {
                 let p = e.unwrap().path();
                 if p.extension().is_some_and(|x| x == "json") {
                     let stem = p.file_stem().unwrap().to_string_lossy().to_string();
@@ -149,14 +159,7 @@ fn closed_form_refuses_what_it_cannot_do() {
 fn firefly_clamp_is_off_by_default_and_counted_when_on() {
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
-    let case = CASES
-        .iter()
-        .find(|c| c.name == "sphere-light-tiny")
-        .unwrap();
-    let mut scene = case.load(&dir).unwrap();
-    scene.camera.width = 16;
-    scene.camera.height = 16;
+    let (_, scene) = load_case("sphere-light-tiny", 16, 16);
     let base = RenderSettings {
         spp: 8,
         trace: trace_mode(),
@@ -203,11 +206,7 @@ fn firefly_clamp_is_off_by_default_and_counted_when_on() {
 fn non_finite_samples_are_counted_and_kept_out_of_the_image() {
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
-    let case = CASES.iter().find(|c| c.name == "sun-delta").unwrap();
-    let mut scene = case.load(&dir).unwrap();
-    scene.camera.width = 8;
-    scene.camera.height = 4;
+    let (_, scene) = load_case("sun-delta", 8, 4);
     let settings = RenderSettings {
         spp: 9,
         trace: trace_mode(),
@@ -251,11 +250,7 @@ fn non_finite_samples_are_counted_and_kept_out_of_the_image() {
 fn film_sums_stay_exact_over_many_samples() {
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress");
-    let case = CASES.iter().find(|c| c.name == "sun-delta").unwrap();
-    let mut scene = case.load(&dir).unwrap();
-    scene.camera.width = 8;
-    scene.camera.height = 8;
+    let (case, scene) = load_case("sun-delta", 8, 8);
     let reference = case.reference(&renderer, &scene, 1).unwrap();
     let (expected, _) = mean_luminance(&reference.image, None);
     let settings = RenderSettings {

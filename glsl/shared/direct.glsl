@@ -79,7 +79,6 @@ GpuDomeSampling dome_sampling() {
     return d;
 }
 
-// Emitted radiance of light l toward the shading point, at light-surface coordinates uv.
 // Texture coordinates of a point of a triangle light, from its barycentrics (b1, b2) and the
 // mesh's vertex uvs, as surface_at interpolates them for camera rays (so that an emissive mesh
 // looks the same seen directly and as a light).
@@ -87,15 +86,12 @@ vec2 triangle_light_texcoord(GpuLight l, vec2 bc) {
     if (!has_feature(FEATURE_MESHES)) return vec2(0.0);
     GpuInstance inst = get_instance(l.shape);
     if ((inst.flags & INSTANCE_FLAG_UVS) == 0u) return vec2(0.0);
-    IndexRef indices = IndexRef(frame.indices);
-    VertexRef vertices = VertexRef(frame.vertices);
-    uint base = inst.first_index + 3u * floatBitsToUint(l.p1.w);
-    GpuVertex v0 = vertices.v[inst.first_vertex + indices.v[base]];
-    GpuVertex v1 = vertices.v[inst.first_vertex + indices.v[base + 1u]];
-    GpuVertex v2 = vertices.v[inst.first_vertex + indices.v[base + 2u]];
+    GpuVertex v0, v1, v2;
+    instance_triangle(inst, floatBitsToUint(l.p1.w), v0, v1, v2);
     return (1.0 - bc.x - bc.y) * vec2(v0.u, v0.v) + bc.x * vec2(v1.u, v1.v) + bc.y * vec2(v2.u, v2.v);
 }
 
+// Emitted radiance of light l toward the shading point, at light-surface coordinates uv.
 vec3 light_radiance(GpuLight l, vec2 uv, bool delta) {
     if (l.kind == LIGHT_SUN) {
         // The sun's E_perp spread over its cone: L = E / (pi sin^2 theta_s); a delta sun gives E.

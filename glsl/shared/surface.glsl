@@ -18,6 +18,16 @@ struct Surface {
 vec3 xform_point(vec4 m[3], vec3 p) { return vec3(dot(m[0].xyz, p) + m[0].w, dot(m[1].xyz, p) + m[1].w, dot(m[2].xyz, p) + m[2].w); }
 vec3 xform_vector(vec4 m[3], vec3 v) { return vec3(dot(m[0].xyz, v), dot(m[1].xyz, v), dot(m[2].xyz, v)); }
 
+// The three vertices of triangle `prim` of an instance's mesh.
+void instance_triangle(GpuInstance inst, uint prim, out GpuVertex v0, out GpuVertex v1, out GpuVertex v2) {
+    IndexRef indices = IndexRef(frame.indices);
+    VertexRef vertices = VertexRef(frame.vertices);
+    uint base = inst.first_index + 3u * prim;
+    v0 = vertices.v[inst.first_vertex + indices.v[base]];
+    v1 = vertices.v[inst.first_vertex + indices.v[base + 1u]];
+    v2 = vertices.v[inst.first_vertex + indices.v[base + 2u]];
+}
+
 Surface surface_at(Hit h, vec3 o, vec3 d) {
     Surface s;
     s.light = NONE;
@@ -25,12 +35,8 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     s.tangent = vec3(0.0);
     if (has_feature(FEATURE_MESHES) && h.kind == HIT_TRIANGLE) {
         GpuInstance inst = get_instance(h.instance);
-        IndexRef indices = IndexRef(frame.indices);
-        VertexRef vertices = VertexRef(frame.vertices);
-        uint base = inst.first_index + 3u * h.prim;
-        GpuVertex v0 = vertices.v[inst.first_vertex + indices.v[base]];
-        GpuVertex v1 = vertices.v[inst.first_vertex + indices.v[base + 1u]];
-        GpuVertex v2 = vertices.v[inst.first_vertex + indices.v[base + 2u]];
+        GpuVertex v0, v1, v2;
+        instance_triangle(inst, h.prim, v0, v1, v2);
         vec3 b = vec3(1.0 - h.bary.x - h.bary.y, h.bary);
         vec3 p0 = xform_point(inst.object_to_world, v0.position);
         vec3 p1 = xform_point(inst.object_to_world, v1.position);

@@ -176,9 +176,10 @@ pub struct RenderOutput {
     pub passes: Vec<PassReport>,
 }
 
-/// Most samples one invocation takes per dispatch: keeps float32 partial sums small and every
-/// dispatch short (desktop watchdogs).
-const MAX_SAMPLES_PER_INVOCATION: u32 = 256;
+/// Most samples per pixel the device film sums in float32 before the host moves them into float64
+/// (long float32 running sums round systematically); also the most samples one invocation takes
+/// per dispatch, which keeps dispatches short (desktop watchdogs).
+const FILM_FLUSH_SAMPLES: u32 = 256;
 
 pub struct Renderer {
     ctx: Context,
@@ -321,8 +322,8 @@ impl Renderer {
         let per_dispatch = if self.loop_limited()? {
             1
         } else {
-            (settings.samples_per_submit / tile_pixels)
-                .clamp(1, u64::from(MAX_SAMPLES_PER_INVOCATION)) as u32
+            (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_FLUSH_SAMPLES))
+                as u32
         };
         let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
         let mut host = film::HostFilm::new(pixels as usize);
@@ -371,7 +372,7 @@ impl Renderer {
                 }
                 k += n;
                 since_flush += n;
-                if since_flush >= MAX_SAMPLES_PER_INVOCATION {
+                if since_flush >= FILM_FLUSH_SAMPLES {
                     host.flush(ctx, &film)?;
                     since_flush = 0;
                 }

@@ -228,16 +228,8 @@ impl GpuScene {
         let mut dome_scene_index = 0;
         let mut dark_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
-            // A light that emits nothing (zero radiance or zero area) is left out: sampling it
-            // would waste samples, and a zero area is a 1/0 pdf.
-            let zero_area = match &l.kind {
-                LightKind::Rect { u, v, .. } => (u.cross(*v).length() as f32) <= 0.0,
-                LightKind::Disk { radius, .. } | LightKind::Sphere { radius, .. } => {
-                    ((radius * radius) as f32) <= 0.0
-                }
-                LightKind::Dome { .. } | LightKind::Sun { .. } => false,
-            };
-            if zero_area || l.radiance().max_element() <= 0.0 {
+            // A light that emits nothing is left out: sampling it would waste samples.
+            if l.emits_nothing() {
                 dark_lights.push(l.name.clone());
                 continue;
             }

@@ -234,4 +234,17 @@ impl Light {
     pub fn radiance(&self) -> Vec3 {
         self.color * self.intensity * self.exposure.exp2()
     }
+
+    /// Whether the light emits nothing: zero radiance, or an area light whose area is zero in
+    /// float32 (the renderer leaves such lights out; a zero area would be a 1/0 pdf).
+    pub fn emits_nothing(&self) -> bool {
+        let zero_area = match &self.kind {
+            LightKind::Rect { u, v, .. } => (u.cross(*v).length() as f32) <= 0.0,
+            LightKind::Disk { radius, .. } | LightKind::Sphere { radius, .. } => {
+                ((radius * radius) as f32) <= 0.0
+            }
+            LightKind::Dome { .. } | LightKind::Sun { .. } => false,
+        };
+        zero_area || self.radiance().max_element() <= 0.0
+    }
 }

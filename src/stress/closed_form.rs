@@ -4,15 +4,17 @@
 //! positions of the box pixel filter that `primary.comp` integrates.
 //!
 //! Irradiance formulas (TECHNIQUES.md §5): sphere and sun cone by Snyder's formula with the horizon
-//! crossing (§5.3); rects and emissive triangles by the Lambert polygon formula (§5.4, polygons
-//! wholly above the receiver's horizon); a delta sun as E⊥ max(0, n·s); a constant dome as π L; a
+//! crossing (§5.3); rects and emissive triangles by the Lambert polygon formula clipped at the
+//! horizon (§5.4); a delta sun as E⊥ max(0, n·s); a constant dome as π L; a
 //! textured dome by Gauss-Legendre quadrature over the cells of its bilinear interpolant. These are
 //! independent of the GLSL (which samples; it never evaluates these integrals for the image).
 //!
 //! Anything outside that class is an error that names what is unsupported, so a closed form is
 //! never silently wrong.
 
-use crate::scene::{Distribution, Fresnel, LightKind, Scene, ShapeGeometry, SpecularLobe, Texture};
+use crate::scene::{
+    Distribution, Fresnel, Light, LightKind, Scene, ShapeGeometry, SpecularLobe, Texture,
+};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
@@ -70,7 +72,8 @@ pub fn image(scene: &Scene) -> Result<Vec<[f32; 3]>, String> {
 }
 
 struct Setup<'a> {
-    scene: &'a Scene,
+    /// The scene's lights that emit something (the renderer leaves the others out).
+    lights: Vec<&'a Light>,
     receivers: Vec<Receiver>,
     plane: Plane,
     /// Emissive triangles (world corners, radiance, two-sided).
@@ -170,7 +173,9 @@ impl<'a> Setup<'a> {
         }
         let (mut dome_constant, mut dome_irradiance, mut dome_visible) = (None, DVec3::ZERO, false);
         let mut others = 0;
-        for l in &scene.lights {
+        // The lights the renderer uploads: those that emit something.
+        let lights: Vec<&Light> = scene.lights.iter().filter(|l| !l.emits_nothing()).collect();
+        for l in &lights {
             if l.texture.is_some() && !matches!(l.kind, LightKind::Dome { .. }) {
                 return Err(format!("light {}: textured area lights", l.name));
             }
@@ -189,22 +194,10 @@ impl<'a> Setup<'a> {
                         }
                     }
                 }
-                LightKind::Disk { radius, .. } if *radius > 0.0 => {
-                    return Err(format!("light {}: disks", l.name));
-                }
+                LightKind::Disk { .. } => return Err(format!("light {}: disks", l.name)),
                 _ => others += 1,
             }
-            let dark = l.radiance().max_element() == 0.0
-                || match &l.kind {
-                    LightKind::Rect { u, v, .. } => u.cross(*v).length_squared() == 0.0,
-                    LightKind::Sphere { radius, .. } => *radius == 0.0,
-                    _ => false,
-                };
-            // The renderer leaves out lights that emit nothing, visible or not.
-            if matches!(l.kind, LightKind::Rect { .. } | LightKind::Sphere { .. })
-                && l.visible
-                && !dark
-            {
+            if matches!(l.kind, LightKind::Rect { .. } | LightKind::Sphere { .. }) && l.visible {
                 return Err(format!("light {}: visible area lights", l.name));
             }
         }
@@ -212,13 +205,13 @@ impl<'a> Setup<'a> {
         if has_mirror && (others > 0 || !emitters.is_empty() || dome_constant.is_none()) {
             return Err("mirror-like lobes are supported under a constant dome only".into());
         }
-        if !emitters.is_empty() && !scene.lights.is_empty() {
+        if !emitters.is_empty() && !lights.is_empty() {
             return Err(
                 "emissive geometry must be the only light (it could occlude others)".into(),
             );
         }
         Ok(Setup {
-            scene,
+            lights,
             receivers,
             plane,
             emitters,
@@ -239,11 +232,11 @@ impl<'a> Setup<'a> {
             self.dome_constant.unwrap_or(DVec3::ZERO)
         };
         if !(t > 0.0 && t.is_finite()) {
-            return self.miss(d, background());
+            return self.miss(o, d, background());
         }
         let x = o + t * d;
         let Some(r) = self.receivers.iter().find(|r| inside(&r.corners, n, x)) else {
-            return self.miss(d, background());
+            return self.miss(o, d, background());
         };
         if dn >= 0.0 {
             return Err("the camera sees the back of the receiver plane".into());
@@ -261,9 +254,9 @@ impl<'a> Setup<'a> {
         Ok(l)
     }
 
-    fn miss(&self, d: DVec3, background: DVec3) -> Result<DVec3, String> {
+    fn miss(&self, o: DVec3, d: DVec3, background: DVec3) -> Result<DVec3, String> {
         for (tri, _, _) in &self.emitters {
-            if ray_triangle(self.scene.camera.position, d, tri).is_some() {
+            if ray_triangle(o, d, tri).is_some() {
                 return Err("the camera sees emissive geometry".into());
             }
         }
@@ -280,7 +273,7 @@ impl<'a> Setup<'a> {
         if let Some(l) = self.dome_constant {
             e += PI * l;
         }
-        for l in &self.scene.lights {
+        for l in &self.lights {
             let radiance = v3(l.radiance());
             e += match &l.kind {
                 LightKind::Sphere { center, radius } => {
@@ -289,7 +282,7 @@ impl<'a> Setup<'a> {
                     if d2 <= radius * radius {
                         return Err(format!("light {}: receiver inside the sphere", l.name));
                     }
-                    radiance * sphere_irradiance(radius * radius / d2, n.dot(q) / d2.sqrt())
+                    radiance * sphere_irradiance(n.dot(q) / d2.sqrt(), radius * radius / d2)
                 }
                 LightKind::Sun {
                     direction,
@@ -302,20 +295,20 @@ impl<'a> Setup<'a> {
                     } else {
                         // L = E⊥ / (π sin²θs) (docs/scene-format.md).
                         let s2 = half.sin().powi(2);
-                        radiance / (PI * s2) * sphere_irradiance(s2, n.dot(s))
+                        radiance / (PI * s2) * sphere_irradiance(n.dot(s), s2)
                     }
                 }
                 LightKind::Rect { center, u, v } => {
                     let c = *center - 0.5 * *u - 0.5 * *v;
                     let corners = [c, c + *u, c + *u + *v, c + *v];
-                    radiance * polygon_irradiance(&corners, x, n, l.two_sided, &l.name)?
+                    radiance * emitter_irradiance(&corners, x, n, l.two_sided)
                 }
-                // Disks of radius 0 (others are rejected in Setup::new) emit nothing.
+                // The dome's part is above; disks are rejected in Setup::new.
                 LightKind::Dome { .. } | LightKind::Disk { .. } => DVec3::ZERO,
             };
         }
         for (tri, radiance, two_sided) in &self.emitters {
-            e += *radiance * polygon_irradiance(tri, x, n, *two_sided, "emissive triangle")?;
+            e += *radiance * emitter_irradiance(tri, x, n, *two_sided);
         }
         Ok(e)
     }
@@ -368,54 +361,61 @@ fn ray_triangle(o: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<f64> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && tt > 0.0).then_some(tt)
 }
 
-/// E / L of a uniform spherical cap of angular radius σ (sin²σ = `s2`) whose axis makes cosθ =
-/// `ct` with the normal, the horizon crossing included (Snyder 1996; TECHNIQUES.md §5.3).
-pub fn sphere_irradiance(s2: f64, ct: f64) -> f64 {
-    if s2 == 0.0 {
-        return 0.0;
-    }
-    if ct * ct > s2 {
+/// E / L of a uniform spherical cap whose axis makes cosθ = `ct` with the normal and whose angular
+/// radius σ has sin²σ = `s2`, the horizon crossing included (Snyder 1996; TECHNIQUES.md §5.3).
+pub fn sphere_irradiance(ct: f64, s2: f64) -> f64 {
+    if ct * ct >= s2 {
         return PI * s2 * ct.max(0.0);
     }
-    let st = (1.0 - ct * ct).max(0.0).sqrt().max(1e-12);
+    let st = (1.0 - ct * ct).sqrt().max(1e-300);
     let x = (1.0 / s2 - 1.0).max(0.0).sqrt();
     let y = (-x * ct / st).clamp(-1.0, 1.0);
-    let z = st * (1.0 - y * y).max(0.0).sqrt();
-    let atan = if x == 0.0 { PI / 2.0 } else { (z / x).atan() };
-    (ct * y.acos() - x * z) * s2 + atan
+    let z = st * (1.0 - y * y).sqrt();
+    ((ct * y.acos() - x * z) * s2 + z.atan2(x)).max(0.0)
 }
 
-/// E / L of a uniform polygon (world corners) at x with normal n (Lambert 1760; TECHNIQUES §5.4).
-/// The polygon must lie wholly above the horizon of x; it emits toward its normal only unless
-/// `two_sided`.
-pub fn polygon_irradiance(
-    corners: &[DVec3],
-    x: DVec3,
-    n: DVec3,
-    two_sided: bool,
-    what: &str,
-) -> Result<f64, String> {
-    let pn = polygon_normal(corners);
-    if pn.length_squared() == 0.0 {
-        return Ok(0.0); // zero area: emits nothing
-    }
-    if !two_sided && pn.dot(x - corners[0]) <= 0.0 {
-        return Ok(0.0); // x is behind a one-sided emitter
-    }
-    let w: Vec<DVec3> = corners.iter().map(|c| (*c - x).normalize()).collect();
-    if w.iter().any(|w| n.dot(*w) < 0.0) {
-        return Err(format!("{what}: crosses the receiver's horizon"));
-    }
-    let mut sum = 0.0;
-    for i in 0..w.len() {
-        let (a, b) = (w[i], w[(i + 1) % w.len()]);
-        let c = a.cross(b);
-        let len = c.length();
-        if len > 0.0 {
-            sum += len.atan2(a.dot(b)) * n.dot(c / len);
+/// E / L at a point with normal n of a uniform planar polygon (vertices relative to the point,
+/// either winding), clipped at n's horizon: Lambert's formula with atan2 edge angles (TECHNIQUES
+/// §5.4). Which side emits is the caller's business.
+pub fn polygon_irradiance(n: DVec3, verts: &[DVec3]) -> f64 {
+    let mut clipped = Vec::with_capacity(verts.len() + 1);
+    for i in 0..verts.len() {
+        let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
+        let (da, db) = (a.dot(n), b.dot(n));
+        if da >= 0.0 {
+            clipped.push(a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            clipped.push(a + (da / (da - db)) * (b - a));
         }
     }
-    Ok(0.5 * sum.abs())
+    if clipped.len() < 3 {
+        return 0.0;
+    }
+    let mut e = 0.0;
+    for i in 0..clipped.len() {
+        let (a, b) = (
+            clipped[i].normalize(),
+            clipped[(i + 1) % clipped.len()].normalize(),
+        );
+        let c = a.cross(b);
+        let len = c.length();
+        if len > 1e-300 {
+            e += len.atan2(a.dot(b)) * n.dot(c) / len;
+        }
+    }
+    0.5 * e.abs()
+}
+
+/// E / L at x (normal n) of a uniform polygon in world space that emits toward its normal
+/// (counter-clockwise winding) only, unless `two_sided`; zero-area polygons emit nothing.
+fn emitter_irradiance(corners: &[DVec3], x: DVec3, n: DVec3, two_sided: bool) -> f64 {
+    let pn = polygon_normal(corners);
+    if pn.length_squared() == 0.0 || (!two_sided && pn.dot(x - corners[0]) <= 0.0) {
+        return 0.0;
+    }
+    let rel: Vec<DVec3> = corners.iter().map(|c| *c - x).collect();
+    polygon_irradiance(n, &rel)
 }
 
 /// ∫ T(ω) max(0, n·ω) dω of a lat-long texture T as the renderer reads it (bilinear with wrapping,
@@ -516,7 +516,7 @@ mod tests {
                 }
             }
             let quad = sum * 2.0 * PI * (1.0 - sigma.cos()) / (n * n) as f64;
-            let exact = sphere_irradiance(sigma.sin().powi(2), theta.cos());
+            let exact = sphere_irradiance(theta.cos(), sigma.sin().powi(2));
             assert!(
                 (exact - quad).abs() < 1e-5 * quad.max(1e-3),
                 "{sigma_deg} {theta_deg}: {exact} vs {quad}"
@@ -542,19 +542,16 @@ mod tests {
         let x = a / h;
         let q = x / (1.0 + x * x).sqrt();
         let ff = 4.0 * q * q.atan();
-        let e = polygon_irradiance(&sq(h, a), DVec3::ZERO, DVec3::Z, false, "t").unwrap();
+        let e = emitter_irradiance(&sq(h, a), DVec3::ZERO, DVec3::Z, false);
         assert!((e - ff).abs() < 1e-12, "{e} vs {ff}");
-        let tiny = polygon_irradiance(&sq(1e5, 5e3), DVec3::ZERO, DVec3::Z, true, "t").unwrap();
+        let tiny = emitter_irradiance(&sq(1e5, 5e3), DVec3::ZERO, DVec3::Z, true);
         let approx = 1e8 / 1e10; // A / d² (cos = 1)
         assert!((tiny / approx - 1.0).abs() < 5e-3, "{tiny}");
         // Behind a one-sided emitter whose normal points up (+z): nothing.
         let mut up = sq(1.0, 1.0);
         up.reverse();
-        assert_eq!(
-            polygon_irradiance(&up, DVec3::ZERO, DVec3::Z, false, "t").unwrap(),
-            0.0
-        );
-        let two = polygon_irradiance(&up, DVec3::ZERO, DVec3::Z, true, "t").unwrap();
+        assert_eq!(emitter_irradiance(&up, DVec3::ZERO, DVec3::Z, false), 0.0);
+        let two = emitter_irradiance(&up, DVec3::ZERO, DVec3::Z, true);
         assert!((two - ff).abs() < 1e-12);
     }
 }
