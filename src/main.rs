@@ -297,6 +297,7 @@ fn compare(a: CompareArgs) -> Result<()> {
         let meta = ImageMetadata {
             spp: out.stats.spp,
             render_seconds: out.stats.render_seconds,
+            setup_seconds: out.stats.setup_seconds,
             device: ctx.info().name.clone(),
             seed: a.seed,
             extra: vec![("illum.technique".into(), t.name().into())],
@@ -550,7 +551,8 @@ fn render(a: RenderArgs) -> Result<()> {
     }
     let meta = ImageMetadata {
         spp: out.stats.spp,
-        render_seconds: out.stats.total_seconds,
+        render_seconds: out.stats.render_seconds,
+        setup_seconds: out.stats.setup_seconds,
         device: ctx.info().name.clone(),
         seed: a.seed,
         extra,

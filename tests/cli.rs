@@ -26,9 +26,12 @@ fn assert_clean_error(code: i32, err: &str, needles: &[&str]) {
     }
 }
 
+/// Also: the header separates steady-state rendering from set-up (kernel compilation, upload,
+/// build, warm-up), and the two add up to no more than the command's own wall time.
 #[test]
 fn renders_the_default_scene_to_exr_and_png() {
     let png = common::temp_path("default.png");
+    let start = std::time::Instant::now();
     let (code, _, err) = illum(&[
         "render",
         "-o",
@@ -42,8 +45,27 @@ fn renders_the_default_scene_to_exr_and_png() {
     assert_eq!(code, 0, "stderr:\n{err}");
     assert!(png.exists() && png.with_extension("exr").exists());
     let img = illum::output::read_exr(&png.with_extension("exr")).unwrap();
+    let wall = start.elapsed().as_secs_f64();
     assert_eq!(img.width, 48);
     assert!(img.channel("Albedo.R").is_some());
+    let seconds = |name: &str| -> f64 {
+        img.attribute(name)
+            .unwrap_or_else(|| panic!("missing {name}"))
+            .parse()
+            .unwrap()
+    };
+    let (render, setup) = (
+        seconds("illum.renderSeconds"),
+        seconds("illum.setupSeconds"),
+    );
+    assert!(
+        render > 0.0 && setup > 0.0,
+        "render {render} s, setup {setup} s"
+    );
+    assert!(
+        render + setup <= wall,
+        "render {render} s + setup {setup} s > wall {wall} s"
+    );
 }
 
 #[test]

@@ -55,6 +55,7 @@ fn meta() -> ImageMetadata {
     ImageMetadata {
         spp: 64,
         render_seconds: 12.5,
+        setup_seconds: 3.25,
         device: "NVIDIA Test GPU (ünïcode)".into(),
         seed: u64::MAX - 1,
         extra: vec![
@@ -142,6 +143,7 @@ fn exr_round_trip_with_variance() {
 
     assert_eq!(attr(&img, "illum.spp"), "64");
     assert_eq!(attr(&img, "illum.renderSeconds"), "12.5");
+    assert_eq!(attr(&img, "illum.setupSeconds"), "3.25");
     assert_eq!(attr(&img, "illum.device"), "NVIDIA Test GPU (ünïcode)");
     assert_eq!(attr(&img, "illum.seed"), (u64::MAX - 1).to_string());
     assert_eq!(attr(&img, "illum.technique"), "mis");

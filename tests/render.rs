@@ -220,7 +220,8 @@ fn exr_has_the_aov_layers_and_metadata() {
     let path = temp_path("aovs.exr");
     let meta = illum::output::ImageMetadata {
         spp: 2,
-        render_seconds: out.stats.total_seconds,
+        render_seconds: out.stats.render_seconds,
+        setup_seconds: out.stats.setup_seconds,
         device: "test".into(),
         seed: 0,
         extra: vec![],

@@ -95,6 +95,7 @@ fn light(kind: LightKind) -> Light {
         two_sided: false,
         texture: None,
         visible: true,
+        shadows: true,
     }
 }
 

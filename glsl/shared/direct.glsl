@@ -13,9 +13,16 @@
 //   sample, also those that miss all lights or fall below the horizon). The diffuse lobe takes N_B
 //   cosine samples under TECHNIQUE_BRDF, or under MIS with INTEGRATOR_DIFFUSE_MIS; otherwise light
 //   samples only, as in the course.
-// * Lights along a ray: every light a BRDF sample crosses counts, and light surfaces do not occlude
-//   (shadow rays see MASK_GEOMETRY only); emissive geometry is geometry and occludes. Both
+// * Lights are opaque objects (Mitsuba 3, pbrt-v4): shadow rays see geometry and the light
+//   surfaces that cast shadows (MASK_OCCLUDERS), so a BRDF sample counts only the first light it
+//   meets, and a light hides what is behind it, exactly like emissive geometry. A light with
+//   "shadows": false is transparent: BRDF samples count it and every light behind it. Both
 //   techniques use the same shadow rays, so the MIS weights sum to one.
+// * A shadow ray runs from the offset origin to the light point itself (not along the shading
+//   point's direction for the shading point's distance), ending short of it by a margin that
+//   scales like the float error of both ends, so it never reaches the emitter's own surface.
+// * A shading point on an emitter's own surface (emissive geometry lit by itself) sees that
+//   emitter as a sphere from inside (LIGHT_FLAG_SELF) or, for a planar emitter, not at all.
 // * A BRDF sample finds the finite lights it crosses by traversing the light BVH (a tree over their
 //   bounds, src/render/lights.rs); the infinite lights (dome, sun) are always tested. At most
 //   DIRECT_MAX_CROSSED lights along one direction are counted.
@@ -147,7 +154,20 @@ struct Shading {
     vec3 n, t, b;  // shading frame, n on the viewer's side
     vec3 v;        // toward the viewer
     vec3 albedo;   // Lambert rho
+    uint self_light;   // the light whose surface p lies on (emissive shapes), else NONE
 };
+
+// Light i as seen from the shading point: flagged LIGHT_FLAG_SELF when p lies on its surface.
+GpuLight light_seen_from(Shading sh, uint i) {
+    GpuLight l = get_light(i);
+    if (i == sh.self_light) l.flags |= LIGHT_FLAG_SELF;
+    return l;
+}
+
+// Whether light l can light the shading point at all (a planar emitter cannot light itself).
+bool light_reaches(GpuLight l) {
+    return !light_self(l) || l.kind == LIGHT_SPHERE;
+}
 
 // Sum of the lobes' f cos for direction l (light samples), with each specular lobe's MIS weight
 // against its own BRDF samples. `n_l_pdf` is n_l p_l of the light technique (0 for a delta light).
@@ -172,12 +192,27 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
 // Rays traced by this invocation (for the rays-per-second figures).
 uint g_rays = 0u;
 
-// Adds c if the segment from the shading point along w up to `dist` is unoccluded.
+float max_abs(vec3 v) { return max(abs(v.x), max(abs(v.y), abs(v.z))); }
+
+// Relative float32 error allowed at the end of a shadow segment: ~64 ulp of the larger end's
+// coordinates, a quarter of offset_ray_origin's 256-ulp offset, so rounding of the light point
+// (and of the tracer's hit on it) cannot put the emitter's surface inside the segment.
+const float SHADOW_END_ULPS = 64.0 / 8388608.0;
+
+// Returns c if the light point p + dist w (dist = INF: the direction w) is visible from the
+// shading point. The segment runs from the offset origin to that point and stops short of it by
+// 1e-4 of its length plus the end's rounding (pbrt-v4's ShadowEpsilon, with an absolute term for
+// scenes far from the camera).
 vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
     if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
     g_rays += 1u;
-    float tmax = dist == INF ? INF : dist * (1.0 - 1e-4);
-    return trace_occluded(sh.origin, w, 0.0, tmax, MASK_GEOMETRY) ? vec3(0.0) : c;
+    if (dist == INF) return trace_occluded(sh.origin, w, 0.0, INF, MASK_OCCLUDERS) ? vec3(0.0) : c;
+    vec3 x = sh.p + dist * w;
+    vec3 seg = x - sh.origin;
+    float len = length(seg);
+    float tmax = len * (1.0 - 1e-4) - SHADOW_END_ULPS * max(max_abs(x), max_abs(sh.origin));
+    if (!(tmax > 0.0)) return c;   // nothing fits between them
+    return trace_occluded(sh.origin, seg / len, 0.0, tmax, MASK_OCCLUDERS) ? vec3(0.0) : c;
 }
 
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
@@ -213,7 +248,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 n_l = float(n_max) * light_importance(get_light(li), sh.p, sh.n) / total_importance;
                 count = 1u;
             }
-            GpuLight l = get_light(li);
+            GpuLight l = light_seen_from(sh, li);
+            if (!light_reaches(l)) continue;
             if (!many) {
                 count = light_count_for(l, sh.p, n_max);
                 n_l = float(count);
@@ -257,7 +293,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 uint ids[DIRECT_MAX_CROSSED];
                 uint crossed = lights_along(sh.p, wi, ids);
                 for (uint q = 0u; q < crossed; ++q) {
-                    GpuLight l = get_light(ids[q]);
+                    GpuLight l = light_seen_from(sh, ids[q]);
+                    if (!light_reaches(l)) continue;
                     LightHit lh = light_hit(l, dome, sh.p, wi);
                     if (!(lh.pdf > 0.0)) continue;
                     float w = 1.0;
@@ -285,6 +322,7 @@ Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
     sh.ng = dot(s.ng, d) > 0.0 ? -s.ng : s.ng;
     sh.n = dot(s.ns, sh.ng) < 0.0 ? -s.ns : s.ns;
     sh.origin = offset_ray_origin(s.p, sh.ng);
+    sh.self_light = s.light;
     // Tangent: the mesh's, else the material's direction, each projected on the tangent plane;
     // else around +Y (so that anisotropic spheres are brushed along latitudes); else any. The
     // bitangent's handedness is not needed: the distributions are even in the bitangent.

@@ -46,6 +46,10 @@
 // The light is the emission of scene geometry (an emissive shape or mesh triangle): it occludes
 // like any geometry and has no separate light surface.
 #define LIGHT_FLAG_GEOMETRY 4
+// Never uploaded: set by the integrator on its copy of a light when the shading point lies on that
+// light's own surface (emissive geometry lit by itself). A sphere then counts the point as inside
+// (float rounding cannot put it outside and sample the outer cap), a planar light skips itself.
+#define LIGHT_FLAG_SELF 8
 
 // Microfacet models (GpuLobe.distribution) and Fresnel kinds (GpuLobe.fresnel).
 #define DIST_DBRDF 0
@@ -66,10 +70,14 @@
 #define INSTANCE_FLAG_UVS 2
 #define INSTANCE_FLAG_TANGENTS 4
 
-// Ray masks: camera rays see geometry and visible light shapes; shadow rays see geometry only
-// (lights do not occlude each other, the convention of TECHNIQUES.md 3.3).
+// Ray masks. Camera rays see geometry and the visible light surfaces; shadow rays (and so BRDF
+// samples, which end at the first occluder) see geometry and the light surfaces that cast shadows.
+// Area lights are opaque objects by default, as in Mitsuba 3, pbrt-v4 and RenderMan; a light with
+// "shadows": false is transparent to shadow rays.
 #define MASK_GEOMETRY 1
 #define MASK_LIGHTS 2
+#define MASK_LIGHT_SHADOWS 4
+#define MASK_OCCLUDERS 5
 
 // Direct-lighting techniques (Frame.integrator.x): BRDF sampling only, light sampling only, or
 // both combined by multiple importance sampling (the power heuristic).

@@ -102,6 +102,7 @@ LightHit light_miss() {
 }
 
 bool light_two_sided(GpuLight l) { return (l.flags & LIGHT_FLAG_TWO_SIDED) != 0u; }
+bool light_self(GpuLight l) { return (l.flags & LIGHT_FLAG_SELF) != 0u; }
 
 // Completes an area sample at point x with normal nl and area density 1 / area: converts the pdf to
 // solid angle (TECHNIQUES 2.0).
@@ -239,7 +240,7 @@ LightSample sample_sphere(GpuLight l, vec3 p, vec2 u) {
     vec3 dc = c - p;
     float d2 = dot(dc, dc);
     float r2 = r * r;
-    if (d2 <= r2) {
+    if (d2 <= r2 || light_self(l)) {
         // Inside (or on) the sphere: it sees only the inner side.
         if (!light_two_sided(l)) return s;
         vec3 nl = uniform_sphere(u);
@@ -273,14 +274,15 @@ LightHit sphere_hit(GpuLight l, vec3 p, vec3 w) {
     vec3 dc = c - p;
     float d2 = dot(dc, dc);
     float r2 = r * r;
-    if (d2 <= r2) {
+    if (d2 <= r2 || light_self(l)) {
         if (!light_two_sided(l)) return h;
-        // Far root from inside (Haines et al. 2019 discriminant).
+        // Far root from inside (Haines et al. 2019 discriminant). From a point on the surface, a
+        // direction leaving the sphere has a far root of ~0 (rounding): not a hit.
         float bq = dot(dc, w);
         vec3 lq = bq * w - dc;
         float disc = max(0.0, r2 - dot(lq, lq));
         float t = bq + sqrt(disc);
-        if (!(t > 0.0)) return h;
+        if (!(t > (light_self(l) ? 1e-4 * r : 0.0))) return h;
         vec3 nl = normalize(p + t * w - c);
         float cl = abs(dot(nl, w));
         if (!(cl > 0.0)) return h;

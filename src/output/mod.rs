@@ -92,7 +92,11 @@ impl Film {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ImageMetadata {
     pub spp: u32,
+    /// Steady-state rendering: the passes' wall time (`illum.renderSeconds`).
     pub render_seconds: f64,
+    /// Everything before the first pass: kernel compilation, upload, trace-structure build and
+    /// the warm-up dispatch (`illum.setupSeconds`).
+    pub setup_seconds: f64,
     pub device: String,
     pub seed: u64,
     /// Further string attributes, e.g. `("illum.technique", "mis")`.

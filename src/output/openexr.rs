@@ -19,6 +19,7 @@ use super::{Film, ImageMetadata, OutputError};
 /// Custom attributes written from [`ImageMetadata`]'s fixed fields.
 const SPP: &str = "illum.spp";
 const RENDER_SECONDS: &str = "illum.renderSeconds";
+const SETUP_SECONDS: &str = "illum.setupSeconds";
 const DEVICE: &str = "illum.device";
 const SEED: &str = "illum.seed";
 
@@ -60,6 +61,7 @@ fn layer_attributes(path: &Path, meta: &ImageMetadata) -> Result<LayerAttributes
     let fixed = [
         (SPP, spp),
         (RENDER_SECONDS, AttributeValue::F64(meta.render_seconds)),
+        (SETUP_SECONDS, AttributeValue::F64(meta.setup_seconds)),
         (DEVICE, AttributeValue::Text(text(&meta.device))),
         // EXR ints are i32, so the u64 seed goes as its decimal string.
         (SEED, AttributeValue::Text(text(&meta.seed.to_string()))),
@@ -70,7 +72,7 @@ fn layer_attributes(path: &Path, meta: &ImageMetadata) -> Result<LayerAttributes
     for (name, value) in &meta.extra {
         let reason = if name.is_empty() || name.len() > 255 || name.contains('\0') {
             Some("names must be 1 to 255 bytes without NUL")
-        } else if [SPP, RENDER_SECONDS, DEVICE, SEED].contains(&name.as_str())
+        } else if [SPP, RENDER_SECONDS, SETUP_SECONDS, DEVICE, SEED].contains(&name.as_str())
             || standard_names::ALL.contains(&name.as_bytes())
         {
             Some("the name is reserved for a standard or illum attribute")

@@ -152,6 +152,10 @@ pub struct RenderStats {
     /// The empty first dispatch (pipeline compilation by drivers that compile lazily).
     pub warmup_seconds: f64,
     pub build: BuildStats,
+    /// Wall time from the start of `render` to the first pass: kernel compilation, upload,
+    /// trace-structure build and warm-up.
+    pub setup_seconds: f64,
+    /// Wall time of the passes (steady-state rendering; evaluation excluded).
     pub render_seconds: f64,
     pub device_seconds: f64,
     pub total_seconds: f64,
@@ -315,6 +319,7 @@ impl Renderer {
             )
         })?;
         let warmup_seconds = warm.elapsed().as_secs_f64();
+        let setup_seconds = t0.elapsed().as_secs_f64();
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows.
         const TILE: u32 = 512;
@@ -417,6 +422,7 @@ impl Renderer {
             stats: RenderStats {
                 upload_seconds,
                 warmup_seconds,
+                setup_seconds,
                 build,
                 render_seconds: wall,
                 device_seconds: device,

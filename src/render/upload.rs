@@ -24,9 +24,9 @@ pub struct GpuScene {
     pub meshes: Vec<MeshRange>,
     /// (mesh index, rows of the camera-relative object-to-world matrix) per instance.
     pub instances: Vec<(u32, [[f32; 4]; 3])>,
-    /// Shapes [0, geometry_shapes) are scene geometry; the rest are visible light surfaces.
-    pub geometry_shapes: u32,
     pub shapes: Vec<GpuShape>,
+    /// Ray mask of each shape (MASK_*): scene geometry first, then the light surfaces.
+    pub shape_masks: Vec<u32>,
     /// Boxes of the shapes (lo.xyz, hi.xyz), padded so that rounding never clips a hit.
     pub shape_boxes: Vec<[f32; 6]>,
     /// Camera position in world space: the origin of the render's coordinates.
@@ -220,7 +220,7 @@ impl GpuScene {
         for s in &scene.shapes {
             shapes.push(shape_of(&s.geometry, s.material, NONE));
         }
-        let geometry_shapes = shapes.len() as u32;
+        let mut shape_masks = vec![MASK_GEOMETRY; shapes.len()];
 
         // Lights.
         let mut lights = Vec::new();
@@ -307,9 +307,14 @@ impl GpuScene {
                     None
                 }
             };
-            if let (Some(geom), true) = (surface, l.visible) {
+            // The light's surface: seen by camera rays when visible, by shadow rays when it
+            // casts shadows (an opaque object, the default).
+            let mask = if l.visible { MASK_LIGHTS } else { 0 }
+                | if l.shadows { MASK_LIGHT_SHADOWS } else { 0 };
+            if let (Some(geom), true) = (surface, mask != 0) {
                 g.shape = shapes.len() as u32;
                 shapes.push(shape_of(&geom, NONE, index));
+                shape_masks.push(mask);
             }
             lights.push(g);
         }
@@ -524,8 +529,8 @@ impl GpuScene {
             features,
             meshes,
             instances,
-            geometry_shapes,
             shapes,
+            shape_masks,
             shape_boxes: aabbs,
             origin,
             dark_lights,

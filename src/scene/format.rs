@@ -253,6 +253,7 @@ pub struct LightDef {
     pub texture: Option<String>,
     #[serde(default = "default_visible")]
     pub visible: bool,
+    pub shadows: Option<bool>,
 }
 
 pub fn default_color() -> V3 {

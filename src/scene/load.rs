@@ -484,6 +484,13 @@ impl Builder<'_> {
                 &format!("a {kind} light cannot be two-sided"),
             ));
         }
+        if let (Some(v), true) = (def.shadows, matches!(kind, "dome" | "sun")) {
+            return Err(ctx.err(
+                format!("{f}.shadows"),
+                v,
+                &format!("a {kind} light has no surface to cast shadows"),
+            ));
+        }
         if kind == "sun" && def.texture.is_some() {
             return Err(SceneError::unsupported(
                 ctx.file,
@@ -540,6 +547,7 @@ impl Builder<'_> {
                 .map(|t| self.texture_ref(&format!("{f}.texture"), t))
                 .transpose()?,
             visible: def.visible,
+            shadows: def.shadows.unwrap_or(true),
         };
         if !light.radiance().is_finite() {
             return Err(ctx.err(

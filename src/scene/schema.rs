@@ -194,6 +194,10 @@ pub struct Common {
     /// Whether camera rays see the light (area lights and dome).
     #[serde(default = "default_visible")]
     visible: bool,
+    /// Area lights only: whether the light's surface is an opaque object that blocks other
+    /// lights and BRDF rays (default true, as in Mitsuba 3 and pbrt-v4); false makes it
+    /// transparent to shadow rays.
+    shadows: Option<bool>,
 }
 
 /// Rectangular area light (radiance = color · intensity · 2^exposure).

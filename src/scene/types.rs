@@ -209,6 +209,9 @@ pub struct Light {
     pub texture: Option<TextureId>,
     /// Whether camera rays see the light's surface (area lights and dome).
     pub visible: bool,
+    /// Whether the light's surface blocks shadow rays and BRDF rays (area lights; an opaque
+    /// object by default, as in Mitsuba 3 and pbrt-v4).
+    pub shadows: bool,
 }
 
 impl Material {

@@ -157,29 +157,23 @@ impl TraceStructure {
             }
         }
         if let Some(ab) = &scene.aabb_buffer {
-            let n = scene.shapes.len() as u32;
-            let groups = [
-                (0, scene.geometry_shapes, MASK_GEOMETRY),
-                (
-                    scene.geometry_shapes,
-                    n - scene.geometry_shapes,
-                    MASK_LIGHTS,
-                ),
-            ];
-            for (first, count, mask) in groups {
-                if count == 0 {
-                    continue;
-                }
+            // One AABB bottom level per run of shapes that share a ray mask.
+            let masks = &scene.shape_masks;
+            let mut first = 0;
+            while first < masks.len() {
+                let mask = masks[first];
+                let count = masks[first..].iter().take_while(|&&m| m == mask).count();
                 instances.push(TlasInstance {
                     blas: inputs.len(),
                     transform: identity,
-                    custom_index: first,
+                    custom_index: first as u32,
                     mask: mask as u8,
                 });
                 inputs.push(BlasInput::Aabbs(AabbGeometry {
-                    aabb_address: ab.address + u64::from(first) * 24,
-                    count,
+                    aabb_address: ab.address + first as u64 * 24,
+                    count: count as u32,
                 }));
+                first += count;
             }
         }
         Ok(TraceStructure::RayQuery(rayquery::build(

@@ -118,11 +118,7 @@ pub fn hits(scene: &GpuScene, ray: &Ray) -> Vec<RefHit> {
         }
     }
     for (i, s) in scene.shapes.iter().enumerate() {
-        let mask = if (i as u32) < scene.geometry_shapes {
-            MASK_GEOMETRY
-        } else {
-            MASK_LIGHTS
-        };
+        let mask = scene.shape_masks[i];
         if ray.mask & mask == 0 {
             continue;
         }

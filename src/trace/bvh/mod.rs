@@ -252,11 +252,7 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
         let inst = BvhInstance {
             root: BVH_SHAPE,
             index: i as u32,
-            mask: if (i as u32) < scene.geometry_shapes {
-                MASK_GEOMETRY
-            } else {
-                MASK_LIGHTS
-            },
+            mask: scene.shape_masks[i],
             ..Default::default()
         };
         let aabb = Aabb {
