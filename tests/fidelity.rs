@@ -309,3 +309,65 @@ fn a_light_hides_the_light_behind_it_like_emissive_geometry() {
     assert_mean_matches(&a.film, &expected, z_for(1e-3), &label);
     assert_no_validation_messages(&ctx);
 }
+
+/// Root-mean-square of the per-pixel difference of two films (red channel).
+fn rms_difference(a: &illum::output::Film, b: &illum::output::Film) -> f64 {
+    let sum: f64 = a
+        .beauty
+        .iter()
+        .zip(&b.beauty)
+        .map(|(p, q)| (f64::from(p[0]) - f64::from(q[0])).powi(2))
+        .sum();
+    (sum / a.beauty.len() as f64).sqrt()
+}
+
+/// Issue 16, convention 7: a sphere's "pole" orients its anisotropic tangents (Mitsuba's and
+/// pbrt's dp/du, latitudes about the pole). A scene with the pole along +Z must render like the
+/// same scene rotated so that +Z becomes +Y with the default pole (+Y). Two renders of the first
+/// scene with other seeds give the noise level: the mean squared difference between the two scenes
+/// must be that of two renders of one scene (F-ratio of ~576 pixels each; 1.5 is far out in the
+/// tail), and the same scene without its pole must be far from it (the test has power).
+#[test]
+fn a_sphere_pole_orients_its_anisotropy() {
+    // R: rotation by -90 degrees about X, taking +Z to +Y: (x, y, z) -> (x, z, -y).
+    let rot = |v: [f64; 3]| [v[0], v[2], -v[1]];
+    let v = |a: [f64; 3]| format!("[{}, {}, {}]", a[0], a[1], a[2]);
+    let sphere_scene = |rotated: bool, pole: Option<[f64; 3]>| {
+        let r = |a: [f64; 3]| if rotated { v(rot(a)) } else { v(a) };
+        let pole = pole
+            .map(|p| format!(r#", "pole": {}"#, v(p)))
+            .unwrap_or_default();
+        format!(
+            r#"{{"camera": {{"position": {}, "look_at": [0, 0, 0], "up": {}, "fov_y": 40, "resolution": [{RES}, {RES}]}},
+                "materials": {{"brushed": {{"diffuse": [0.05, 0.05, 0.05],
+                                          "specular": [{{"model": "beckmann", "roughness": [0.05, 0.4]}}]}}}},
+                "shapes": {{"ball": {{"sphere": {{"center": [0, 0, 0], "radius": 1}}, "material": "brushed"{pole}}}}},
+                "lights": {{"bulb": {{"sphere": {{"center": {}, "radius": 0.3}}, "intensity": 30}}}}}}"#,
+            r([3.0, 1.0, 2.0]),
+            r([0.0, 1.0, 0.0]),
+            r([2.0, 3.0, 3.0]),
+        )
+    };
+    let ctx = context();
+    let z_pole = scene(&sphere_scene(false, Some([0.0, 0.0, 1.0])));
+    let a1 = render_with(&ctx, &z_pole, 64, 1);
+    let a2 = render_with(&ctx, &z_pole, 64, 2);
+    let b = render_with(&ctx, &scene(&sphere_scene(true, None)), 64, 3);
+    let c = render_with(&ctx, &scene(&sphere_scene(false, None)), 64, 4);
+    let noise = rms_difference(&a1.film, &a2.film);
+    let same = rms_difference(&a1.film, &b.film);
+    let other = rms_difference(&c.film, &b.film);
+    eprintln!(
+        "rms differences: noise {noise:.4e}, pole +Z vs rotated {same:.4e}, no pole vs rotated {other:.4e}"
+    );
+    assert!(noise > 0.0);
+    assert!(
+        (same / noise).powi(2) < 1.5,
+        "pole +Z vs the rotated scene: {same} vs noise {noise}"
+    );
+    assert!(
+        (other / noise).powi(2) > 3.0,
+        "without a pole the scenes should differ: {other} vs noise {noise}"
+    );
+    assert_no_validation_messages(&ctx);
+}

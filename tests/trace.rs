@@ -170,6 +170,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
                     radius: 0.5,
                 },
                 material: 0,
+                pole: None,
             },
             AnalyticShape {
                 name: "panel".into(),
@@ -179,6 +180,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
                     v: DVec3::new(0.6, 0.0, -0.8),
                 },
                 material: 0,
+                pole: None,
             },
             AnalyticShape {
                 name: "disk".into(),
@@ -188,6 +190,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
                     radius: 0.45,
                 },
                 material: 0,
+                pole: None,
             },
         ],
         lights: vec![

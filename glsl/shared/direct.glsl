@@ -323,8 +323,9 @@ Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
     sh.n = dot(s.ns, sh.ng) < 0.0 ? -s.ns : s.ns;
     sh.origin = offset_ray_origin(s.p, sh.ng);
     sh.self_light = s.light;
-    // Tangent: the mesh's, else the material's direction, each projected on the tangent plane;
-    // else around +Y (so that anisotropic spheres are brushed along latitudes); else any. The
+    // Tangent: the surface's (mesh tangents, a sphere's pole), else the material's direction,
+    // each projected on the tangent plane; else around +Y (so that anisotropic spheres are brushed
+    // along latitudes, as with a pole of +Y); else any. The
     // bitangent's handedness is not needed: the distributions are even in the bitangent.
     bool directed = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u;
     vec3 dir = directed ? m.tangent_dir : vec3(0.0, 1.0, 0.0);

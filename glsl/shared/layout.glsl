@@ -32,6 +32,8 @@
 #define SHAPE_SPHERE 0
 #define SHAPE_RECT 1
 #define SHAPE_DISK 2
+// GpuShape.flags: a sphere's p1.xyz is the pole of its tangent frame.
+#define SHAPE_FLAG_POLE 1
 
 // Light kinds (GpuLight.kind).
 #define LIGHT_RECT 0
@@ -162,7 +164,7 @@ struct GpuInstance {
 
 struct GpuShape {
     vec4 p0;   // sphere: centre, radius; rect: centre; disk: centre, radius
-    vec4 p1;   // rect: full edge u; disk: unit normal
+    vec4 p1;   // rect: full edge u; disk: unit normal; sphere: unit pole (SHAPE_FLAG_POLE)
     vec4 p2;   // rect: full edge v; disk: unit tangent
     uint kind;       // SHAPE_*
     uint material;   // NONE for light shapes

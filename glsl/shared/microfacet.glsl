@@ -11,7 +11,10 @@
 //   contributes 0 but still counts in the number of samples N (never re-draw, never renormalise).
 // * Only the shading-normal hemisphere is tested here. The geometric-normal test
 //   sign(ng.l) == sign(ng.v), against light leaks, is the kernel's job.
-// * alpha is clamped to >= 1e-4. A lobe whose alpha is < 1e-3 along both axes is a delta mirror
+// * alpha is clamped to >= 1e-4 (Mitsuba 3's floor) and stays a Beckmann/GGX lobe down to there,
+//   where float32 still represents it: D's peak 1 / (pi alpha^2) = 3.2e7, pdf^2 in the MIS weights
+//   1e15, and the half vector's rounding (~6e-8) is 6e-4 of alpha. Only a lobe uploaded with
+//   alpha = 0 (the scene's roughness 0: a perfect mirror) is a delta mirror
 //   lobe: brdf_sample() returns the mirror direction with weight F, pdf = 1 (a probability, not a
 //   density) and delta = true; brdf_eval() returns 0 for it (a light sample never hits it), and MIS
 //   must give its samples weight 1 (mis.glsl).
@@ -42,7 +45,7 @@
 #include "common.glsl"
 
 const float MF_ALPHA_MIN = 1e-4;     // clamp (mitsuba3 configure(), pbrt-v4 TrowbridgeReitz)
-const float MF_DELTA_ALPHA = 1e-3;   // below this along both axes: a delta mirror (pbrt-v4 EffectivelySmooth)
+const float MF_DELTA_ALPHA = 5e-5;   // below this along both axes (i.e. uploaded as 0): a delta mirror
 
 struct BrdfEval {
     vec3 f_cos;   // f(l, v) cos(theta_l)
@@ -97,8 +100,7 @@ vec3 lobe_fresnel(GpuLobe lobe, float cos_theta) {
 
 vec2 lobe_alpha(GpuLobe lobe) { return max(lobe.alpha, vec2(MF_ALPHA_MIN)); }
 bool lobe_is_delta(GpuLobe lobe) {
-    vec2 a = lobe_alpha(lobe);
-    return max(a.x, a.y) < MF_DELTA_ALPHA;
+    return max(lobe.alpha.x, lobe.alpha.y) < MF_DELTA_ALPHA;
 }
 bool lobe_is_ggx(GpuLobe lobe) {
     return lobe.distribution == DIST_GGX_SMITH || lobe.distribution == DIST_GGX_SMITH_SEPARABLE;

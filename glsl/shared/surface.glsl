@@ -66,6 +66,8 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
             // Project onto the sphere so that offsets start from the true surface.
             s.p = sh.p0.xyz + sh.p0.w * s.ng;
             s.uv = direction_to_latlong(s.ng, vec2(1.0, 0.0));
+            // Tangent along the latitudes about the pole: Mitsuba's and pbrt's dp/du.
+            if ((sh.flags & SHAPE_FLAG_POLE) != 0u) s.tangent = cross(sh.p1.xyz, s.ng);
         } else if (sh.kind == SHAPE_RECT) {
             s.ng = normalize(cross(sh.p1.xyz, sh.p2.xyz));
             vec3 q = s.p - sh.p0.xyz;

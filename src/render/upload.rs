@@ -83,7 +83,13 @@ fn lobe(l: &crate::scene::SpecularLobe) -> GpuLobe {
     GpuLobe {
         fresnel0: f0.extend(0.0).to_array(),
         fresnel1: f1.extend(0.0).to_array(),
-        alpha: l.alpha.max(glam::Vec2::splat(1e-4)).to_array(),
+        // Mitsuba 3's floor of 1e-4, where the lobe is still exact in float32; zero along both
+        // axes is a perfect mirror (a delta lobe, glsl/shared/microfacet.glsl).
+        alpha: if l.alpha == glam::Vec2::ZERO {
+            [0.0; 2]
+        } else {
+            l.alpha.max(glam::Vec2::splat(1e-4)).to_array()
+        },
         distribution: match l.distribution {
             Distribution::DBrdf => DIST_DBRDF,
             Distribution::BeckmannSmith => DIST_BECKMANN_SMITH,
@@ -218,7 +224,12 @@ impl GpuScene {
             }
         };
         for s in &scene.shapes {
-            shapes.push(shape_of(&s.geometry, s.material, NONE));
+            let mut g = shape_of(&s.geometry, s.material, NONE);
+            if let Some(pole) = s.pole {
+                g.p1 = v4(pole, 0.0);
+                g.flags |= SHAPE_FLAG_POLE;
+            }
+            shapes.push(g);
         }
         let mut shape_masks = vec![MASK_GEOMETRY; shapes.len()];
 

@@ -108,8 +108,9 @@ pub fn default_diffuse() -> V3 {
 pub struct LobeDef {
     /// Microfacet model.
     pub model: ModelDef,
-    /// Roughness alpha in (0, 1]: one number (isotropic) or [alpha_t, alpha_b] (along the
-    /// tangent and the bitangent).
+    /// Roughness alpha in [0, 1]: one number (isotropic) or [alpha_t, alpha_b] (along the
+    /// tangent and the bitangent). Below 1e-4 it is 1e-4 (Mitsuba 3's floor); 0 along both axes
+    /// is a perfect mirror.
     pub roughness: NumOrArray<2>,
     /// Fresnel term; default {"schlick": [0.04, 0.04, 0.04]}.
     #[serde(default = "default_fresnel")]
@@ -158,6 +159,8 @@ pub struct ShapeDef {
     pub gltf: Option<GltfDef>,
     pub material: Option<String>,
     pub transform: Option<TransformDef>,
+    /// Spheres only: the axis of the anisotropic tangent's latitudes.
+    pub pole: Option<V3>,
 }
 
 /// A sphere in world space.

@@ -228,10 +228,14 @@ impl Builder<'_> {
     fn lobe(&self, f: &str, lobe: &LobeDef) -> Result<SpecularLobe> {
         let ctx = self.ctx;
         let alpha = |field: String, a: f64| {
-            if a > 0.0 && a <= 1.0 {
+            if (0.0..=1.0).contains(&a) {
                 Ok(a as f32)
             } else {
-                Err(ctx.err(field, fmt_num(a), "roughness must be in (0, 1]"))
+                Err(ctx.err(
+                    field,
+                    fmt_num(a),
+                    "roughness must be in [0, 1] (0: a perfect mirror)",
+                ))
             }
         };
         let alpha = match lobe.roughness {
@@ -304,10 +308,22 @@ impl Builder<'_> {
             Some(t) => transform::parse(ctx, &format!("{f}.transform"), t)?,
             None => DMat4::IDENTITY,
         };
+        if def.pole.is_some() && kind != "sphere" {
+            return Err(SceneError::unsupported(
+                ctx.file,
+                format!("{f}.pole"),
+                format!("{kind} shapes take no pole (it orients a sphere's tangents)"),
+            ));
+        }
+        let pole = def
+            .pole
+            .map(|p| ctx.direction(&format!("{f}.pole"), p))
+            .transpose()?;
         let analytic = |geometry| AnalyticShape {
             name: name.to_owned(),
             geometry,
             material: material.unwrap_or_default(),
+            pole,
         };
         if let Some(s) = &def.sphere {
             let (center, radius) = ctx.sphere(&format!("{f}.sphere"), s, false)?;

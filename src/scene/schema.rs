@@ -126,6 +126,10 @@ pub struct SphereShape {
     sphere: SphereDef,
     /// Material name.
     material: String,
+    /// Axis of the sphere's parameterisation: the anisotropic tangent at p is
+    /// normalize(pole × (p − center)), along the latitudes (Mitsuba 3's and pbrt-v4's dp/du with
+    /// the pole as their local +Z). Default +Y.
+    pole: Option<V3>,
 }
 
 #[derive(JsonSchema)]

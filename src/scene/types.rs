@@ -78,7 +78,9 @@ pub enum Fresnel {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpecularLobe {
     pub distribution: Distribution,
-    /// Roughness alpha along the tangent and the bitangent (equal when isotropic), in [1e-4, 1].
+    /// Roughness alpha along the tangent and the bitangent (equal when isotropic), in [0, 1]: the
+    /// renderer raises it to 1e-4 (Mitsuba 3's floor) unless it is 0 along both axes, a perfect
+    /// mirror.
     pub alpha: Vec2,
     pub fresnel: Fresnel,
 }
@@ -164,6 +166,9 @@ pub struct AnalyticShape {
     pub name: String,
     pub geometry: ShapeGeometry,
     pub material: MaterialId,
+    /// Spheres: unit axis of the tangent frame, tangent = normalize(pole × (p − center)) (Mitsuba 3
+    /// and pbrt-v4's dp/du about their local +Z); None: the material's `tangent`, else +Y.
+    pub pole: Option<DVec3>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

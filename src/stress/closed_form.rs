@@ -200,6 +200,15 @@ impl<'a> Setup<'a> {
             if matches!(l.kind, LightKind::Rect { .. } | LightKind::Sphere { .. }) && l.visible {
                 return Err(format!("light {}: visible area lights", l.name));
             }
+            if l.shadows
+                && lights.len() > 1
+                && !matches!(l.kind, LightKind::Dome { .. } | LightKind::Sun { .. })
+            {
+                return Err(format!(
+                    "light {}: an area light that casts shadows on the scene's other lights",
+                    l.name
+                ));
+            }
         }
         let has_mirror = receivers.iter().any(|r| r.mirror != DVec3::ZERO);
         if has_mirror && (others > 0 || !emitters.is_empty() || dome_constant.is_none()) {
