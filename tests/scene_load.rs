@@ -303,7 +303,13 @@ fn every_form_loads() {
             radius: 0.1
         }
     );
-    assert_eq!(s.lights[3].kind, LightKind::Dome { rotation_deg: 90.0 });
+    assert_eq!(
+        s.lights[3].kind,
+        LightKind::Dome {
+            rotation_deg: 90.0,
+            convention: illum::scene::DomeConvention::Illum
+        }
+    );
     assert_eq!(s.lights[3].texture, Some(1));
     let sun = LightKind::Sun {
         direction: DVec3::Y,

@@ -106,6 +106,7 @@ vec3 light_radiance(GpuLight l, vec2 uv, bool delta) {
         float om = l.p1.x;
         return l.radiance / (PI * om * (2.0 - om));
     }
+    if (l.kind == LIGHT_DOME) return l.radiance * dome_texture(l, uv).rgb;
     if (l.kind == LIGHT_TRIANGLE) {
         if (l.texture == NONE) return l.radiance;
         uv = triangle_light_texcoord(l, uv);

@@ -52,6 +52,9 @@
 // light's own surface (emissive geometry lit by itself). A sphere then counts the point as inside
 // (float rounding cannot put it outside and sample the outer cap), a planar light skips itself.
 #define LIGHT_FLAG_SELF 8
+// A dome's map convention (docs/scene-format.md; glsl/shared/dome_map.glsl): neither bit is illum's.
+#define LIGHT_FLAG_DOME_MITSUBA 16
+#define LIGHT_FLAG_DOME_PBRT 32
 
 // Microfacet models (GpuLobe.distribution) and Fresnel kinds (GpuLobe.fresnel).
 #define DIST_DBRDF 0
@@ -67,6 +70,14 @@
 // glTF metallic-roughness: diffuse, lobes[0].fresnel0 and lobes[0].alpha are re-derived per texel
 // from base_metallic, roughness and the base-colour and metallic-roughness textures.
 #define MATERIAL_FLAG_METALLIC_ROUGHNESS 4
+
+// GpuTexture.flags: the filter, and the wrap mode (TEXTURE_WRAP_*) of each axis in two bits.
+#define TEXTURE_FLAG_NEAREST 1
+#define TEXTURE_WRAP_SHIFT_U 1
+#define TEXTURE_WRAP_SHIFT_V 3
+#define TEXTURE_WRAP_REPEAT 0
+#define TEXTURE_WRAP_CLAMP 1
+#define TEXTURE_WRAP_MIRROR 2
 
 #define INSTANCE_FLAG_NORMALS 1
 #define INSTANCE_FLAG_UVS 2
@@ -214,10 +225,12 @@ struct GpuLight {
     float area;      // surface area (rect, disk, sphere, triangle)
 };
 
-// Importance-sampling tables of a dome's equirectangular map (src/render/dome.rs builds them;
-// glsl/shared/light_sampling.glsl reads them). Texel weights are lum(tint * texel) filtered with the
-// texel integral of the bilinear lookup (a 3x3 tent, so every texel the bilinear radiance reaches
-// has a weight > 0) times sin(theta) at the row centre. width == 0: no table (uniform sphere).
+// Importance-sampling tables of a dome's map (src/render/dome.rs builds them;
+// glsl/shared/light_sampling.glsl reads them) over a grid of width x height cells of its map
+// coordinates (glsl/shared/dome_map.glsl: the texels, or for the Mitsuba convention the cells
+// between texel centres), each weighted by the luminance the lookup gives inside it (every cell
+// where the radiance can be positive has a weight > 0) times the solid angle per unit map area at
+// its centre. width == 0: no table (uniform sphere).
 struct GpuDomeSampling {
     uint64_t marginal;     // float[height + 1]: CDF over rows, marginal[0] = 0, marginal[height] = 1
     uint64_t conditional;  // float[height * (width + 1)]: per row, CDF over its texels, 0 ... 1
@@ -241,7 +254,7 @@ struct GpuTexture {
     uint offset;     // first texel in the texel buffer
     uint width;
     uint height;
-    uint flags;
+    uint flags;      // TEXTURE_FLAG_NEAREST | wrap mode along u << TEXTURE_WRAP_SHIFT_U | along v << ..._V
 };
 
 // Accumulated per pixel over all samples so far (sums, divided by the sample count on readback).

@@ -31,11 +31,12 @@
 //   (b1, b2) = sqrt(u1) (1 - u2, u2). Chosen over spherical-triangle sampling for robustness (no
 //   angle differences; the same float32 pitfalls as the rect's angle sum); MIS with BRDF samples
 //   covers the near/grazing configurations where area sampling is noisy.
-// * dome: nearest-texel piecewise-constant sampling of the equirectangular map (2.4) with the
-//   marginal/conditional CDFs of GpuDomeSampling, then a uniform position inside the texel:
-//   pdf = P(row) P(texel | row) W H / (2 pi^2 sin(theta)). Probabilities are differences of the
-//   stored float CDFs, which is exactly the mass the binary search gives each texel. Without a table
-//   (width == 0) the dome is sampled uniformly (pdf = 1 / (4 pi)).
+// * dome: piecewise-constant sampling of the map's cells (2.4; glsl/shared/dome_map.glsl) with the
+//   marginal/conditional CDFs of GpuDomeSampling, then a uniform position inside the cell:
+//   pdf = P(row) P(cell | row) W H / (dω / du dv), 2 pi^2 sin(theta) for lat-long maps, 4 pi for
+//   the equal-area square. Probabilities are differences of the stored float CDFs, which is
+//   exactly the mass the binary search gives each cell. Without a table (width == 0) the dome is
+//   sampled uniformly (pdf = 1 / (4 pi)). LightSample.uv / LightHit.uv are map coordinates.
 #ifndef ILLUM_LIGHT_SAMPLING_GLSL
 #define ILLUM_LIGHT_SAMPLING_GLSL
 
@@ -46,6 +47,7 @@
 
 #include "layout.glsl"
 #include "common.glsl"
+#include "dome_map.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeCdfRef { float v[]; };
 
@@ -440,7 +442,7 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
     if (ds.width == 0u) {
         s.wi = uniform_sphere(u);
         s.n = -s.wi;
-        s.uv = direction_to_latlong(s.wi, l.p0.xy);
+        s.uv = dome_uv(l, s.wi);
         s.pdf = 1.0 / (4.0 * PI);
         return s;
     }
@@ -458,37 +460,38 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
     if (!(pm > 0.0) || !(pc > 0.0)) return s;
     float fy = clamp((ux - m0) / pm, 0.0, 1.0);
     float fx = clamp((uy - c0) / pc, 0.0, 1.0);
-    vec2 uv = vec2((float(i) + fx) / float(W), (float(j) + fy) / float(H));
-    float theta = PI * uv.y;
-    float st = sin(theta);
-    if (!(st > 0.0)) return s;
-    s.wi = normalize(latlong_to_direction(uv, st, cos(theta), l.p0.xy));
+    vec2 uv = vec2((float(i) + fx) / float(W) + dome_cell_offset(l, W), (float(j) + fy) / float(H));
+    if (uv.x >= 1.0) uv.x -= 1.0;
+    float jacobian;
+    s.wi = dome_direction(l, uv, jacobian);
+    if (!(jacobian > 0.0)) return s;
     s.n = -s.wi;
     s.uv = uv;
-    s.pdf = pm * pc * float(W * H) / (2.0 * PI * PI * st);
+    s.pdf = pm * pc * float(W * H) / jacobian;
     return s;
 }
 
 LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 w) {
     LightHit h = light_miss();
     h.n = -w;
-    h.uv = direction_to_latlong(w, l.p0.xy);
+    h.uv = dome_uv(l, w);
     if (ds.width == 0u) {
         h.pdf = 1.0 / (4.0 * PI);
         return h;
     }
     uint W = ds.width, H = ds.height;
-    uint i = min(uint(max(h.uv.x, 0.0) * float(W)), W - 1u);
+    float cu = h.uv.x - dome_cell_offset(l, W);
+    if (cu < 0.0) cu += 1.0;
+    uint i = min(uint(max(cu, 0.0) * float(W)), W - 1u);
     uint j = min(uint(max(h.uv.y, 0.0) * float(H)), H - 1u);
     DomeCdfRef marg = DomeCdfRef(ds.marginal);
     DomeCdfRef cond = DomeCdfRef(ds.conditional);
     uint base = j * (W + 1u);
     float pm = marg.v[j + 1u] - marg.v[j];
     float pc = cond.v[base + i + 1u] - cond.v[base + i];
-    // sin(theta) of the rotated direction = its distance from the Y axis (rotation keeps it).
-    float st = length(w.xz);
-    if (!(st > 0.0)) return h;
-    h.pdf = pm * pc * float(W * H) / (2.0 * PI * PI * st);
+    float jacobian = dome_jacobian(l, w);
+    if (!(jacobian > 0.0)) return h;
+    h.pdf = pm * pc * float(W * H) / jacobian;
     return h;
 }
 

@@ -10,6 +10,7 @@
 
 #include "layout.glsl"
 #include "common.glsl"
+#include "dome_map.glsl"
 
 layout(constant_id = SPEC_FEATURES) const uint FEATURES = 0xffffffffu;
 bool has_feature(uint f) { return (FEATURES & f) != 0u; }
@@ -30,32 +31,76 @@ GpuMaterial get_material(uint i) { return MaterialRef(frame.materials).v[i]; }
 GpuShape get_shape(uint i) { return ShapeRef(frame.shapes).v[i]; }
 GpuLight get_light(uint i) { return LightRef(frame.lights).v[i]; }
 
-// Bilinear lookup with wrapping; uv (0,0) is the top-left corner of the image.
-vec4 texture_lookup(uint tex, vec2 uv) {
-    if (!has_feature(FEATURE_TEXTURES) || tex == NONE) return vec4(1.0);
-    GpuTexture t = TextureRef(frame.textures).v[tex];
-    vec2 st = uv * vec2(t.width, t.height) - 0.5;
-    vec2 f = st - floor(st);
-    ivec2 i0 = ivec2(floor(st));
-    ivec2 size = ivec2(t.width, t.height);
-    TexelRef texels = TexelRef(frame.texels);
-    vec4 acc = vec4(0.0);
-    for (int k = 0; k < 4; ++k) {
-        ivec2 o = ivec2(k & 1, k >> 1);
-        ivec2 p = (i0 + o) % size;
-        p += ivec2(p.x < 0 ? size.x : 0, p.y < 0 ? size.y : 0);
-        float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
-        acc += w * texels.v[t.offset + uint(p.y) * t.width + uint(p.x)];
-    }
-    return acc;
+GpuTexture get_texture(uint i) { return TextureRef(frame.textures).v[i]; }
+
+// Texel index i along an axis of n texels, wrapped by mode (TEXTURE_WRAP_*; Mitsuba 3's
+// semantics: mirror repeats the edge texel).
+int wrap_texel(int i, int n, uint mode) {
+    if (mode == TEXTURE_WRAP_CLAMP) return clamp(i, 0, n - 1);
+    int m = mode == TEXTURE_WRAP_MIRROR ? 2 * n : n;
+    int p = i % m;
+    if (p < 0) p += m;
+    return p < n ? p : m - 1 - p;
 }
 
+// Texel p of t, wrapped per axis.
+vec4 texel_at(GpuTexture t, ivec2 p, uvec2 wrap) {
+    int x = wrap_texel(p.x, int(t.width), wrap.x);
+    int y = wrap_texel(p.y, int(t.height), wrap.y);
+    return TexelRef(frame.texels).v[t.offset + uint(y) * t.width + uint(x)];
+}
+
+// The texture at texel coordinates st (texel (i, j) covers [i, i + 1) x [j, j + 1), its centre at
+// (i + 1/2, j + 1/2)): the texel containing st, or the bilinear blend of the four nearest centres.
+vec4 texture_at(GpuTexture t, vec2 st, bool nearest, uvec2 wrap) {
+    if (nearest) return texel_at(t, ivec2(floor(st)), wrap);
+    vec2 c = st - 0.5;
+    vec2 f = c - floor(c);
+    ivec2 i0 = ivec2(floor(c));
+    return mix(mix(texel_at(t, i0, wrap), texel_at(t, i0 + ivec2(1, 0), wrap), f.x),
+               mix(texel_at(t, i0 + ivec2(0, 1), wrap), texel_at(t, i0 + ivec2(1, 1), wrap), f.x), f.y);
+}
+
+// Brings a coordinate into a range its wrap mode maps the same way, so that the integer texel
+// index stays small: [0, 1) for repeat, [0, 2) for mirror, [-1, 2] for clamp.
+float reduce_coordinate(float x, uint mode) {
+    if (mode == TEXTURE_WRAP_REPEAT) return x - floor(x);
+    if (mode == TEXTURE_WRAP_MIRROR) return x - 2.0 * floor(0.5 * x);
+    return clamp(x, -1.0, 2.0);
+}
+
+// Lookup with the texture's own filter and wrap modes; uv (0,0) is the top-left corner of the
+// image. NONE (or a scene without textures) reads 1.
+vec4 texture_lookup(uint tex, vec2 uv) {
+    if (!has_feature(FEATURE_TEXTURES) || tex == NONE) return vec4(1.0);
+    GpuTexture t = get_texture(tex);
+    uvec2 wrap = uvec2(t.flags >> TEXTURE_WRAP_SHIFT_U, t.flags >> TEXTURE_WRAP_SHIFT_V) & 3u;
+    vec2 r = vec2(reduce_coordinate(uv.x, wrap.x), reduce_coordinate(uv.y, wrap.y));
+    return texture_at(t, r * vec2(t.width, t.height), (t.flags & TEXTURE_FLAG_NEAREST) != 0u, wrap);
+}
+
+// A dome's map at map coordinates uv, looked up as its convention does (glsl/shared/dome_map.glsl).
+vec4 dome_texture(GpuLight l, vec2 uv) {
+    if (!has_feature(FEATURE_TEXTURES) || l.texture == NONE) return vec4(1.0);
+    if (dome_is_pbrt(l)) {
+        GpuTexture t = get_texture(l.texture);
+        uvec2 clamped = uvec2(TEXTURE_WRAP_CLAMP);
+        return texture_at(t, clamp(uv, 0.0, 1.0) * vec2(t.width, t.height), true, clamped);
+    }
+    if (dome_is_mitsuba(l)) {
+        // Column centres at (i + 1/2) / W, rows at j / (H - 1): st.y - 1/2 = v (H - 1).
+        GpuTexture t = get_texture(l.texture);
+        vec2 st = vec2(uv.x * float(t.width), clamp(uv.y, 0.0, 1.0) * float(t.height - 1u) + 0.5);
+        return texture_at(t, st, false, uvec2(TEXTURE_WRAP_REPEAT, TEXTURE_WRAP_CLAMP));
+    }
+    return texture_lookup(l.texture, uv);
+}
+
+// What a ray that leaves the scene along dir sees of the dome.
 vec3 dome_radiance(vec3 dir) {
     if (!has_feature(FEATURE_DOME) || frame.counts.w == NONE) return vec3(0.0);
     GpuLight l = get_light(frame.counts.w);
-    vec3 L = l.radiance;
-    if (l.texture != NONE) L *= texture_lookup(l.texture, direction_to_latlong(dir, l.p0.xy)).rgb;
-    return L;
+    return l.radiance * dome_texture(l, dome_uv(l, dir)).rgb;
 }
 
 #endif

@@ -1,20 +1,28 @@
-//! Importance-sampling tables of a dome (environment) light's equirectangular map, read by
-//! `sample_dome`/`dome_hit` in glsl/shared/light_sampling.glsl (TECHNIQUES.md 2.4).
+//! Importance-sampling tables of a dome (environment) light's map, read by `sample_dome`/`dome_hit`
+//! in glsl/shared/light_sampling.glsl (TECHNIQUES.md 2.4), for each map convention of
+//! glsl/shared/dome_map.glsl.
 //!
-//! Texel (i, j) (column i, row j from the top; u = longitude, v = θ/π with v = 0 at +Y) gets the
-//! weight `w_ij = sin θ_j · Σ_ab k_a k_b lum(tint ⊙ L[j+b][i+a])`, k = (1/8, 3/4, 1/8): the luminance
-//! integrated over the texel of the bilinear lookup that `texture_lookup` (glsl/shared/scene.glsl)
-//! makes, wrapping in both directions as it does, times sin θ at the row centre. Every texel the
-//! bilinear radiance reaches therefore has a positive weight, so the pdf is positive wherever the
-//! dome's radiance is (needed when light sampling is used alone, as for the course's diffuse lobe).
+//! The tables cover a grid of cells in map coordinates (u, v), and a cell's weight is the luminance
+//! `lum(tint ⊙ L)` the convention's lookup gives inside it, times the solid angle per unit map
+//! area at its centre (sin θ for lat-long maps, 1 for the equal-area square):
+//! - illum: the cells are the texels; with the bilinear filter the weight is the texel integral
+//!   of the bilinear lookup, a separable (1/8, 3/4, 1/8) tent over the neighbours as the texture's
+//!   wrap modes reach them; with the nearest filter, the texel itself.
+//! - Mitsuba: the cells lie between texel centres (W columns offset by half a texel, H − 1 rows
+//!   from pole to pole), where the lookup is one bilinear patch: the mean of its four corners.
+//! - pbrt: the cells are the texels of the square (nearest lookup).
+//!
+//! Every cell where the radiance can be positive therefore has a positive weight, so the pdf is
+//! positive wherever the dome's radiance is (needed when light sampling is used alone, as for the
+//! course's diffuse lobe).
 //!
 //! The tables are a marginal CDF over rows and one conditional CDF per row, accumulated in f64 and
-//! stored as f32 with exact 0 and 1 ends. The GPU samples a row and a texel by binary search and a
-//! uniform point inside the texel; its pdf is `P(row) P(texel | row) W H / (2π² sin θ)` with the
+//! stored as f32 with exact 0 and 1 ends. The GPU samples a row and a cell by binary search and a
+//! uniform point inside the cell; its pdf is `P(row) P(cell | row) W H / (dω/du dv)` with the
 //! probabilities taken as differences of the stored CDFs — exactly the mass the search assigns.
 
 use crate::layout::GpuDomeSampling;
-use crate::scene::Texture;
+use crate::scene::{DomeConvention, Texture, TextureFilter};
 use glam::Vec3;
 
 /// Host side of [`GpuDomeSampling`]: the CDF tables of one map.
@@ -35,56 +43,70 @@ pub fn luminance(c: Vec3) -> f64 {
     0.2126 * f64::from(c.x) + 0.7152 * f64::from(c.y) + 0.0722 * f64::from(c.z)
 }
 
+/// The cell grid of a map of `width` x `height` texels under `convention`: (columns, rows).
+pub fn cells(convention: DomeConvention, width: u32, height: u32) -> (u32, u32) {
+    match convention {
+        DomeConvention::Mitsuba => (width, height.saturating_sub(1).max(1)),
+        DomeConvention::Illum | DomeConvention::Pbrt => (width, height),
+    }
+}
+
 /// Builds the tables of `texture` as a dome map whose radiance is `tint ⊙ texel` (the tint is the
-/// light's colour; only its relative channel weights matter).
-pub fn build(texture: &Texture, tint: Vec3) -> DomeTable {
-    let w = texture.width as usize;
-    let h = texture.height as usize;
+/// light's colour; only its relative channel weights matter), laid out as `convention` says.
+pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeTable {
+    let (tw, th) = (texture.width as usize, texture.height as usize);
     assert!(
-        w > 0 && h > 0 && texture.texels.len() == w * h,
+        tw > 0 && th > 0 && texture.texels.len() == tw * th,
         "dome texture {}: {}x{} with {} texels",
         texture.name,
-        w,
-        h,
+        tw,
+        th,
         texture.texels.len()
     );
-    let lum: Vec<f64> = texture
-        .texels
-        .iter()
-        .map(|t| luminance(tint * t.truncate()).max(0.0))
-        .collect();
-    // Texel integral of the bilinear reconstruction: a separable (1/8, 3/4, 1/8) filter.
-    const K: [f64; 3] = [0.125, 0.75, 0.125];
-    let mut horizontal = vec![0.0f64; w * h];
-    for j in 0..h {
-        for i in 0..w {
-            let mut s = 0.0;
-            for (a, k) in K.iter().enumerate() {
-                let ii = (i + w + a - 1) % w;
-                s += k * lum[j * w + ii];
-            }
-            horizontal[j * w + i] = s;
-        }
-    }
+    let lum = |i: i64, j: i64| luminance(tint * texture.texel(i, j).truncate()).max(0.0);
+    let (cw, ch) = cells(convention, texture.width, texture.height);
+    let (w, h) = (cw as usize, ch as usize);
+    // Solid angle per unit map area at the centre of row j (up to a constant factor).
+    let row_measure = |j: usize| match convention {
+        DomeConvention::Pbrt => 1.0,
+        _ => (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin(),
+    };
     let mut weights = vec![0.0f64; w * h];
     for j in 0..h {
-        let theta = std::f64::consts::PI * (j as f64 + 0.5) / h as f64;
-        let sin_theta = theta.sin();
         for i in 0..w {
-            let mut s = 0.0;
-            for (b, k) in K.iter().enumerate() {
-                let jj = (j + h + b - 1) % h;
-                s += k * horizontal[jj * w + i];
-            }
-            weights[j * w + i] = s * sin_theta;
+            let (ii, jj) = (i as i64, j as i64);
+            let l = match (convention, texture.filter) {
+                (DomeConvention::Mitsuba, _) => {
+                    // Between column centres i, i + 1 (periodic) and rows j, j + 1.
+                    let wrap = |x: i64| x.rem_euclid(tw as i64);
+                    0.25 * (lum(wrap(ii), jj)
+                        + lum(wrap(ii + 1), jj)
+                        + lum(wrap(ii), jj + 1)
+                        + lum(wrap(ii + 1), jj + 1))
+                }
+                (DomeConvention::Pbrt, _) | (DomeConvention::Illum, TextureFilter::Nearest) => {
+                    lum(ii, jj)
+                }
+                (DomeConvention::Illum, TextureFilter::Bilinear) => {
+                    // Texel integral of the bilinear reconstruction, wrapped as the lookup wraps.
+                    const K: [f64; 3] = [0.125, 0.75, 0.125];
+                    let mut s = 0.0;
+                    for (b, kb) in K.iter().enumerate() {
+                        for (a, ka) in K.iter().enumerate() {
+                            s += ka * kb * lum(ii + a as i64 - 1, jj + b as i64 - 1);
+                        }
+                    }
+                    s
+                }
+            };
+            weights[j * w + i] = l * row_measure(j);
         }
     }
     let total: f64 = weights.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
-        // A black (or broken) map: sample by solid angle (sin θ) so that the pdf stays valid.
+        // A black (or broken) map: sample by solid angle so that the pdf stays valid.
         for j in 0..h {
-            let theta = std::f64::consts::PI * (j as f64 + 0.5) / h as f64;
-            weights[j * w..(j + 1) * w].fill(theta.sin());
+            weights[j * w..(j + 1) * w].fill(row_measure(j));
         }
     }
     let mut conditional = Vec::with_capacity(h * (w + 1));
@@ -154,18 +176,6 @@ impl DomeTable {
         let pc = self.conditional[row + i + 1] - self.conditional[row + i];
         f64::from(pm) * f64::from(pc)
     }
-
-    /// Solid-angle pdf of the sampler at lat-long coordinates (u, v) (f64, for tests and tools).
-    pub fn pdf_uv(&self, u: f64, v: f64) -> f64 {
-        let i = ((u * f64::from(self.width)) as u32).min(self.width - 1);
-        let j = ((v * f64::from(self.height)) as u32).min(self.height - 1);
-        let sin_theta = (std::f64::consts::PI * v).sin();
-        if sin_theta <= 0.0 {
-            return 0.0;
-        }
-        self.texel_probability(i, j) * f64::from(self.width) * f64::from(self.height)
-            / (2.0 * std::f64::consts::PI * std::f64::consts::PI * sin_theta)
-    }
 }
 
 #[cfg(test)]
@@ -179,13 +189,9 @@ mod tests {
         let mut texels = vec![Vec4::ZERO; (w * h) as usize];
         texels[(w + 3) as usize] = Vec4::new(1.0, 1.0, 1.0, 1.0);
         let t = build(
-            &Texture {
-                name: "hot".into(),
-                width: w,
-                height: h,
-                texels,
-            },
+            &Texture::new("hot", w, h, texels),
             Vec3::ONE,
+            DomeConvention::Illum,
         );
         assert_eq!(t.marginal.len(), 5);
         assert_eq!(t.conditional.len(), 4 * 9);
@@ -204,13 +210,9 @@ mod tests {
     #[test]
     fn black_map_falls_back_to_solid_angle() {
         let t = build(
-            &Texture {
-                name: "black".into(),
-                width: 4,
-                height: 2,
-                texels: vec![Vec4::ZERO; 8],
-            },
+            &Texture::new("black", 4, 2, vec![Vec4::ZERO; 8]),
             Vec3::ONE,
+            DomeConvention::Illum,
         );
         assert_eq!(t.marginal, vec![0.0, 0.5, 1.0]);
         assert!((t.texel_probability(2, 1) - 0.125).abs() < 1e-7);

@@ -3,7 +3,10 @@
 
 use crate::error::Result;
 use crate::layout::*;
-use crate::scene::{Distribution, Fresnel, LightKind, Scene, ShapeGeometry};
+use crate::scene::{
+    Distribution, DomeConvention, Fresnel, LightKind, Scene, ShapeGeometry, TextureFilter,
+    TextureWrap,
+};
 use crate::vk::{Buffer, Context};
 use ash::vk;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -236,7 +239,8 @@ impl GpuScene {
         // Lights.
         let mut lights = Vec::new();
         let mut dome = NONE;
-        let mut dome_scene_index = 0;
+        // The dome's scene index and map convention.
+        let mut dome_map = (0, DomeConvention::Illum);
         let mut dark_lights = Vec::new();
         for (i, l) in scene.lights.iter().enumerate() {
             // A light that emits nothing is left out: sampling it would waste samples.
@@ -295,12 +299,20 @@ impl GpuScene {
                         radius: *radius,
                     })
                 }
-                LightKind::Dome { rotation_deg } => {
+                LightKind::Dome {
+                    rotation_deg,
+                    convention,
+                } => {
                     let r = rotation_deg.to_radians();
                     g.kind = LIGHT_DOME;
+                    g.flags |= match convention {
+                        DomeConvention::Illum => 0,
+                        DomeConvention::Mitsuba => LIGHT_FLAG_DOME_MITSUBA,
+                        DomeConvention::Pbrt => LIGHT_FLAG_DOME_PBRT,
+                    };
                     g.p0 = [r.cos() as f32, r.sin() as f32, 0.0, 0.0];
                     dome = index;
-                    dome_scene_index = i;
+                    dome_map = (i, *convention);
                     features |= FEATURE_DOME;
                     None
                 }
@@ -435,11 +447,21 @@ impl GpuScene {
         let mut textures = Vec::new();
         let mut texels: Vec<[f32; 4]> = Vec::new();
         for t in &scene.textures {
+            let wrap = |w: TextureWrap| match w {
+                TextureWrap::Repeat => TEXTURE_WRAP_REPEAT,
+                TextureWrap::Clamp => TEXTURE_WRAP_CLAMP,
+                TextureWrap::Mirror => TEXTURE_WRAP_MIRROR,
+            };
             textures.push(GpuTexture {
                 offset: texels.len() as u32,
                 width: t.width,
                 height: t.height,
-                flags: 0,
+                flags: if t.filter == TextureFilter::Nearest {
+                    TEXTURE_FLAG_NEAREST
+                } else {
+                    0
+                } | wrap(t.wrap[0]) << TEXTURE_WRAP_SHIFT_U
+                    | wrap(t.wrap[1]) << TEXTURE_WRAP_SHIFT_V,
             });
             texels.extend(t.texels.iter().map(|v| v.to_array()));
         }
@@ -478,12 +500,10 @@ impl GpuScene {
         let mut dome_table = None;
         let mut dome_sampling = None;
         if dome != NONE
-            && let Some(t) = scene.lights[dome_scene_index].texture
+            && let Some(t) = scene.lights[dome_map.0].texture
         {
-            let table = super::dome::build(
-                &scene.textures[t as usize],
-                scene.lights[dome_scene_index].radiance(),
-            );
+            let tint = scene.lights[dome_map.0].radiance();
+            let table = super::dome::build(&scene.textures[t as usize], tint, dome_map.1);
             let data = ctx.upload("dome CDFs", &table.data(), storage)?;
             let gpu = table.gpu(data.address);
             dome_sampling =

@@ -70,6 +70,36 @@ pub struct TextureDef {
     /// Whether the RGB values are sRGB-encoded (decoded to linear on load). Default: true for
     /// .png/.jpg, false for .exr/.hdr.
     pub srgb: Option<bool>,
+    /// Reconstruction between texel centres (Mitsuba 3's `filter_type`).
+    #[serde(default)]
+    pub filter: FilterDef,
+    /// Texel indices outside the image, along both axes (Mitsuba 3's `wrap_mode`).
+    #[serde(default)]
+    pub wrap: WrapDef,
+}
+
+/// Texture filter.
+#[derive(Debug, Clone, Copy, Default, serde::Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum FilterDef {
+    /// The four nearest texels, weighted bilinearly.
+    #[default]
+    Bilinear,
+    /// The texel that contains the point.
+    Nearest,
+}
+
+/// Texture wrap mode.
+#[derive(Debug, Clone, Copy, Default, serde::Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum WrapDef {
+    /// Periodic.
+    #[default]
+    Repeat,
+    /// The edge texel continues outward.
+    Clamp,
+    /// Reflected at each edge, the edge texel repeated.
+    Mirror,
 }
 
 /// A surface material: Lambert diffuse plus up to two microfacet specular lobes, optionally
@@ -276,6 +306,23 @@ pub struct DomeDef {
     /// Rotation of the map about +Y in degrees.
     #[serde(default)]
     pub rotation: f64,
+    /// How the map covers the sphere: illum's lat-long (default), Mitsuba 3's `envmap` or
+    /// pbrt-v4's equal-area `imageinfinite` (docs/scene-format.md gives each mapping).
+    #[serde(default)]
+    pub convention: DomeConventionDef,
+}
+
+/// Dome map convention.
+#[derive(Debug, Clone, Copy, Default, serde::Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum DomeConventionDef {
+    /// Lat-long, u = 1/2 at -Z, texel centres at (i + 1/2)/size, the texture's filter and wrap.
+    #[default]
+    Illum,
+    /// Mitsuba 3 envmap: lat-long, u = 0 at -Z, rows on the poles, bilinear.
+    Mitsuba,
+    /// pbrt-v4 imageinfinite: equal-area octahedral square map, nearest texel.
+    Pbrt,
 }
 
 /// Distant light.

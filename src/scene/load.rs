@@ -4,8 +4,8 @@
 use super::check::Ctx;
 use super::error::{SceneError, fmt_num, fmt_vec, io_message, quoted};
 use super::format::{
-    FresnelDef, LightDef, LobeDef, MaterialDef, MeshDef, ModelDef, NumOrArray, SceneFile, ShapeDef,
-    TextureDef,
+    DomeConventionDef, FilterDef, FresnelDef, LightDef, LobeDef, MaterialDef, MeshDef, ModelDef,
+    NumOrArray, SceneFile, ShapeDef, TextureDef, WrapDef,
 };
 use super::gltf::{self as gltf_load, GltfCamera};
 use super::texture::{self, ImageKind};
@@ -180,8 +180,18 @@ impl Builder<'_> {
         let bytes = std::fs::read(&path)
             .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
         let srgb = def.srgb.unwrap_or(kind.srgb_by_default());
-        texture::decode(name, &bytes, kind, srgb)
-            .map_err(|m| SceneError::decode(self.ctx.file, &field, &def.file, m))
+        let mut t = texture::decode(name, &bytes, kind, srgb)
+            .map_err(|m| SceneError::decode(self.ctx.file, &field, &def.file, m))?;
+        t.filter = match def.filter {
+            FilterDef::Bilinear => TextureFilter::Bilinear,
+            FilterDef::Nearest => TextureFilter::Nearest,
+        };
+        t.wrap = [match def.wrap {
+            WrapDef::Repeat => TextureWrap::Repeat,
+            WrapDef::Clamp => TextureWrap::Clamp,
+            WrapDef::Mirror => TextureWrap::Mirror,
+        }; 2];
+        Ok(t)
     }
 
     fn material(&self, name: &str, def: &MaterialDef) -> Result<Material> {
@@ -531,6 +541,11 @@ impl Builder<'_> {
         } else if let Some(d) = &def.dome {
             LightKind::Dome {
                 rotation_deg: ctx.finite(&format!("{g}.rotation"), d.rotation)?,
+                convention: match d.convention {
+                    DomeConventionDef::Illum => DomeConvention::Illum,
+                    DomeConventionDef::Mitsuba => DomeConvention::Mitsuba,
+                    DomeConventionDef::Pbrt => DomeConvention::Pbrt,
+                },
             }
         } else {
             let s = def
@@ -571,6 +586,27 @@ impl Builder<'_> {
                 format!("{}", light.radiance()),
                 "color · intensity · 2^exposure overflows 32-bit floats",
             ));
+        }
+        if let (LightKind::Dome { convention, .. }, Some(t)) = (&light.kind, light.texture) {
+            let t = &self.parts.textures[t as usize];
+            let size = format!("{}x{}", t.width, t.height);
+            match convention {
+                DomeConvention::Mitsuba if t.height < 2 => {
+                    return Err(ctx.err(
+                        format!("{f}.texture"),
+                        size,
+                        "a Mitsuba-convention dome map needs at least 2 rows (its first and last lie on the poles)",
+                    ));
+                }
+                DomeConvention::Pbrt if t.width != t.height => {
+                    return Err(ctx.err(
+                        format!("{f}.texture"),
+                        size,
+                        "a pbrt-convention dome map is an equal-area square: width and height must be equal",
+                    ));
+                }
+                _ => {}
+            }
         }
         Ok(light)
     }

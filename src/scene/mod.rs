@@ -3,6 +3,7 @@
 
 mod camera;
 mod check;
+pub mod dome_map;
 mod error;
 mod format;
 mod gltf;

@@ -95,12 +95,7 @@ pub(crate) fn decode(
             );
         }
     }
-    Ok(Texture {
-        name: name.to_owned(),
-        width,
-        height,
-        texels,
-    })
+    Ok(Texture::new(name, width, height, texels))
 }
 
 fn decode_exr(bytes: &[u8]) -> Result<(u32, u32, Vec<Vec4>), String> {

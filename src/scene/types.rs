@@ -52,6 +52,87 @@ pub struct Texture {
     pub height: u32,
     /// Row-major, top row first, linear RGBA (sRGB-encoded sources are decoded on load).
     pub texels: Vec<Vec4>,
+    pub filter: TextureFilter,
+    /// How texel indices outside the image map back into it, along u and along v.
+    pub wrap: [TextureWrap; 2],
+}
+
+/// Reconstruction of a texture between texel centres ((i + 1/2) / size in uv).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TextureFilter {
+    /// The four nearest texels, weighted bilinearly (Mitsuba's and pbrt's default).
+    #[default]
+    Bilinear,
+    /// The texel that contains the point: crisp texels.
+    Nearest,
+}
+
+/// Texel indices outside [0, size): Mitsuba 3's `wrap_mode` semantics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TextureWrap {
+    /// Periodic: index mod size.
+    #[default]
+    Repeat,
+    /// The edge texel continues outward.
+    Clamp,
+    /// Reflected at each edge, the edge texel repeated (…, 1, 0, 0, 1, …, n−1, n−1, n−2, …).
+    Mirror,
+}
+
+impl TextureWrap {
+    /// The texel index that `i` reads along an axis of `n` texels.
+    pub fn index(self, i: i64, n: i64) -> i64 {
+        match self {
+            TextureWrap::Repeat => i.rem_euclid(n),
+            TextureWrap::Clamp => i.clamp(0, n - 1),
+            TextureWrap::Mirror => {
+                let p = i.rem_euclid(2 * n);
+                if p < n { p } else { 2 * n - 1 - p }
+            }
+        }
+    }
+}
+
+impl Texture {
+    /// A texture with the default sampling (bilinear, repeating).
+    pub fn new(name: impl Into<String>, width: u32, height: u32, texels: Vec<Vec4>) -> Texture {
+        Texture {
+            name: name.into(),
+            width,
+            height,
+            texels,
+            filter: TextureFilter::default(),
+            wrap: [TextureWrap::default(); 2],
+        }
+    }
+
+    /// Texel (i, j) after wrapping, as RGBA.
+    pub fn texel(&self, i: i64, j: i64) -> Vec4 {
+        let (w, h) = (i64::from(self.width), i64::from(self.height));
+        let (i, j) = (self.wrap[0].index(i, w), self.wrap[1].index(j, h));
+        self.texels[(j * w + i) as usize]
+    }
+
+    /// The texture at `uv` ((0, 0) the top-left corner of the image), as the renderer reads it
+    /// (`texture_lookup` in glsl/shared/scene.glsl), in f64.
+    pub fn lookup(&self, uv: glam::DVec2) -> glam::DVec4 {
+        let size = glam::DVec2::new(f64::from(self.width), f64::from(self.height));
+        match self.filter {
+            TextureFilter::Nearest => {
+                let p = (uv * size).floor();
+                self.texel(p.x as i64, p.y as i64).as_dvec4()
+            }
+            TextureFilter::Bilinear => {
+                let st = uv * size - 0.5;
+                let i0 = st.floor();
+                let f = st - i0;
+                let (i, j) = (i0.x as i64, i0.y as i64);
+                let t = |a: i64, b: i64| self.texel(i + a, j + b).as_dvec4();
+                (t(0, 0) * (1.0 - f.x) + t(1, 0) * f.x) * (1.0 - f.y)
+                    + (t(0, 1) * (1.0 - f.x) + t(1, 1) * f.x) * f.y
+            }
+        }
+    }
 }
 
 /// The microfacet distribution and shadowing model of a specular lobe.
@@ -188,10 +269,11 @@ pub enum LightKind {
         center: DVec3,
         radius: f64,
     },
-    /// Infinite environment; `texture` is an equirectangular map (u = longitude, v = 0 at +Y).
+    /// Infinite environment; `texture` is a map laid over the sphere as `convention` says.
     /// `rotation_deg` rotates the map about +Y.
     Dome {
         rotation_deg: f64,
+        convention: DomeConvention,
     },
     /// Distant light toward which `direction` points (from the scene to the sun); irradiance at
     /// normal incidence `irradiance` (W·m⁻²) is `color * intensity * 2^exposure`.
@@ -199,6 +281,21 @@ pub enum LightKind {
         direction: DVec3,
         angular_diameter_deg: f64,
     },
+}
+
+/// How a dome's map covers the sphere (docs/scene-format.md, glsl/shared/dome_map.glsl).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DomeConvention {
+    /// Lat-long: u = atan2(x, −z)/2π + ½ (½ at −Z, growing toward +X), v = θ/π from +Y; texel
+    /// centres at ((i + ½)/W, (j + ½)/H); the texture's own filter and wrap modes.
+    #[default]
+    Illum,
+    /// Mitsuba 3's `envmap`: u = atan2(x, −z)/2π (0 at −Z), v = θ/π; column i at (i + ½)/W, row j
+    /// at θ = πj/(H − 1); bilinear, periodic in u, clamped in v.
+    Mitsuba,
+    /// pbrt-v4's `imageinfinite`: the equal-area octahedral square of a square map, pbrt's +Z
+    /// being +Y here (pbrt (x, y, z) = illum (x, −z, y)); nearest texel.
+    Pbrt,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -13,7 +13,8 @@
 //! never silently wrong.
 
 use crate::scene::{
-    Distribution, Fresnel, Light, LightKind, Scene, ShapeGeometry, SpecularLobe, Texture,
+    Distribution, DomeConvention, Fresnel, Light, LightKind, Scene, ShapeGeometry, SpecularLobe,
+    Texture, dome_map,
 };
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
@@ -180,7 +181,10 @@ impl<'a> Setup<'a> {
                 return Err(format!("light {}: textured area lights", l.name));
             }
             match &l.kind {
-                LightKind::Dome { rotation_deg } => {
+                LightKind::Dome {
+                    rotation_deg,
+                    convention,
+                } => {
                     dome_visible = l.visible;
                     match l.texture {
                         None => dome_constant = Some(v3(l.radiance())),
@@ -189,6 +193,7 @@ impl<'a> Setup<'a> {
                                 * dome_irradiance_quadrature(
                                     &scene.textures[t as usize],
                                     *rotation_deg,
+                                    *convention,
                                     n,
                                 );
                         }
@@ -427,10 +432,16 @@ fn emitter_irradiance(corners: &[DVec3], x: DVec3, n: DVec3, two_sided: bool) ->
     polygon_irradiance(n, &rel)
 }
 
-/// ∫ T(ω) max(0, n·ω) dω of a lat-long texture T as the renderer reads it (bilinear with wrapping,
-/// `direction_to_latlong` of common.glsl), by 6-point Gauss-Legendre on every cell between texel
-/// centres, where T is bilinear. Returns RGB.
-pub fn dome_irradiance_quadrature(t: &Texture, rotation_deg: f64, n: DVec3) -> DVec3 {
+/// ∫ T(ω) max(0, n·ω) dω of a dome map T as the renderer reads it under `convention`
+/// (src/scene/dome_map.rs), by 6-point Gauss-Legendre in map coordinates on a 4 x 4 split of every
+/// sampling cell (src/render/dome.rs): the splits fall on the texel centres, where a bilinear
+/// lookup has its kinks. Returns RGB.
+pub fn dome_irradiance_quadrature(
+    t: &Texture,
+    rotation_deg: f64,
+    convention: DomeConvention,
+    n: DVec3,
+) -> DVec3 {
     const X: [f64; 6] = [
         -0.932_469_514_203_152,
         -0.661_209_386_466_264_5,
@@ -447,52 +458,29 @@ pub fn dome_irradiance_quadrature(t: &Texture, rotation_deg: f64, n: DVec3) -> D
         0.360_761_573_048_138_6,
         0.171_324_492_379_170_3,
     ];
-    let (w, h) = (t.width as i64, t.height as i64);
-    let texel = |i: i64, j: i64| {
-        let (i, j) = (i.rem_euclid(w), j.rem_euclid(h));
-        t.texels[(j * w + i) as usize].truncate().as_dvec3()
+    const SPLIT: u32 = 4;
+    let (cw, ch) = crate::render::dome::cells(convention, t.width, t.height);
+    let offset = if convention == DomeConvention::Mitsuba {
+        0.5 / f64::from(t.width)
+    } else {
+        0.0
     };
-    let (c, s) = {
-        let r = rotation_deg.to_radians();
-        (r.cos(), r.sin())
-    };
+    let (du, dv) = (1.0 / f64::from(cw * SPLIT), 1.0 / f64::from(ch * SPLIT));
     let mut e = DVec3::ZERO;
-    // Cells in st = uv·size - 1/2 between integer lattice points, cut at the image border.
-    for cj in -1..h {
-        for ci in -1..w {
-            let (s0, s1) = ((ci as f64).max(-0.5), ((ci + 1) as f64).min(w as f64 - 0.5));
-            let (t0, t1) = ((cj as f64).max(-0.5), ((cj + 1) as f64).min(h as f64 - 0.5));
-            let corners = [
-                texel(ci, cj),
-                texel(ci + 1, cj),
-                texel(ci, cj + 1),
-                texel(ci + 1, cj + 1),
-            ];
-            if corners.iter().all(|c| *c == DVec3::ZERO) {
-                continue;
-            }
+    for j in 0..ch * SPLIT {
+        for i in 0..cw * SPLIT {
+            let (u0, v0) = (offset + f64::from(i) * du, f64::from(j) * dv);
             for (xa, wa) in X.iter().zip(W) {
                 for (xb, wb) in X.iter().zip(W) {
-                    let st = DVec2::new(
-                        s0 + (s1 - s0) * 0.5 * (xa + 1.0),
-                        t0 + (t1 - t0) * 0.5 * (xb + 1.0),
-                    );
-                    let f = st - DVec2::new(ci as f64, cj as f64);
-                    let value = corners[0] * (1.0 - f.x) * (1.0 - f.y)
-                        + corners[1] * f.x * (1.0 - f.y)
-                        + corners[2] * (1.0 - f.x) * f.y
-                        + corners[3] * f.x * f.y;
-                    let (u, v) = ((st.x + 0.5) / w as f64, (st.y + 0.5) / h as f64);
-                    let (phi, theta) = (2.0 * PI * (u - 0.5), PI * v);
-                    let r = DVec3::new(
-                        theta.sin() * phi.sin(),
-                        theta.cos(),
-                        -theta.sin() * phi.cos(),
-                    );
-                    let dir = DVec3::new(c * r.x + s * r.z, r.y, -s * r.x + c * r.z);
-                    let jac = theta.sin() * (2.0 * PI / w as f64) * (PI / h as f64);
-                    let area = 0.25 * (s1 - s0) * (t1 - t0) * wa * wb;
-                    e += value * n.dot(dir).max(0.0) * jac * area;
+                    let u = u0 + du * 0.5 * (xa + 1.0);
+                    let uv = DVec2::new(u.rem_euclid(1.0), v0 + dv * 0.5 * (xb + 1.0));
+                    let (dir, jacobian) = dome_map::direction(convention, rotation_deg, uv);
+                    let cos = n.dot(dir);
+                    if cos <= 0.0 {
+                        continue;
+                    }
+                    let value = dome_map::lookup(t, convention, uv).truncate();
+                    e += value * cos * jacobian * 0.25 * du * dv * wa * wb;
                 }
             }
         }

@@ -268,13 +268,15 @@ fn bad_values_give_specific_errors() {
             &["bad.json: shapes.x: must have exactly one of", "got none"],
         ),
         (
-            with_material(r#"{ "specular": [{ "model": "dbrdf", "roughness": 0 }] }"#),
-            &["bad.json: materials.m.specular[0].roughness: roughness must be in (0, 1], got 0"],
+            with_material(r#"{ "specular": [{ "model": "dbrdf", "roughness": -0.1 }] }"#),
+            &[
+                "bad.json: materials.m.specular[0].roughness: roughness must be in [0, 1] (0: a perfect mirror), got -0.1",
+            ],
         ),
         (
             with_material(r#"{ "specular": [{ "model": "ggx", "roughness": [0.5, 1.5] }] }"#),
             &[
-                "bad.json: materials.m.specular[0].roughness[1]: roughness must be in (0, 1], got 1.5",
+                "bad.json: materials.m.specular[0].roughness[1]: roughness must be in [0, 1] (0: a perfect mirror), got 1.5",
             ],
         ),
         (
