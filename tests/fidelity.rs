@@ -555,3 +555,71 @@ fn dome_maps_light_a_floor_as_the_quadrature_says_under_every_convention() {
     }
     assert_no_validation_messages(&ctx);
 }
+
+/// Issue 16, convention 5: texture filter and wrap modes, seen directly on an emissive quad whose
+/// uvs run from u = -1 to u = 2, against the f64 reference lookup (`Texture::lookup`). Pixels
+/// where the lookup is not linear across the pixel (a texel edge for nearest, a texel centre for
+/// bilinear) are left out; elsewhere the pixel mean is the lookup at its centre, exactly.
+#[test]
+fn texture_filter_and_wrap_modes_read_as_documented() {
+    use glam::{DVec2, Vec4};
+    use illum::scene::{Texture, TextureFilter, TextureWrap};
+    const W: u32 = 48;
+    const SPP: u32 = 8;
+    let json = r#"{"camera": {"position": [0, 0, 2], "look_at": [0, 0, 0], "fov_y": 28.072486935852954, "resolution": [48, 16]},
+        "materials": {"glow": {"diffuse": [0, 0, 0], "emission": [1, 1, 1]}},
+        "shapes": {"quad": {"mesh": {"positions": [[-1.5, -0.5, 0], [1.5, -0.5, 0], [1.5, 0.5, 0], [-1.5, 0.5, 0]],
+                                     "uvs": [[-1, 1], [2, 1], [2, 0], [-1, 0]], "indices": [0, 1, 2, 0, 2, 3]},
+                            "material": "glow"}}}"#;
+    let ctx = context();
+    let texels = [1.0f32, 2.0, 4.0, 8.0]
+        .map(|v| Vec4::new(v, v, v, 1.0))
+        .to_vec();
+    for filter in [TextureFilter::Nearest, TextureFilter::Bilinear] {
+        for wrap in [TextureWrap::Repeat, TextureWrap::Clamp, TextureWrap::Mirror] {
+            let mut t = Texture::new("strip", 4, 1, texels.clone());
+            t.filter = filter;
+            t.wrap = [wrap; 2];
+            let mut s = scene(json);
+            s.textures.push(t.clone());
+            s.materials[0].emission_texture = Some(0);
+            let out = render_with(&ctx, &s, SPP, 2);
+            let mut checked = 0;
+            for x in 0..W {
+                // u = x_plane + 1/2 across the image: pixel x spans u in [x/16 - 1, (x+1)/16 - 1].
+                let (u0, u1) = (f64::from(x) / 16.0 - 1.0, f64::from(x + 1) / 16.0 - 1.0);
+                let edge = match filter {
+                    TextureFilter::Nearest => (u0 * 4.0).floor() != (u1 * 4.0 - 1e-9).floor(),
+                    TextureFilter::Bilinear => {
+                        (u0 * 4.0 - 0.5).floor() != (u1 * 4.0 - 0.5 - 1e-9).floor()
+                    }
+                };
+                if edge {
+                    continue;
+                }
+                // The lookup is linear across the pixel: the column's mean estimates it at the
+                // centre, with the spread of a uniform over the pixel's range of values (0 for
+                // nearest, where every sample reads the same texel).
+                let e = t.lookup(DVec2::new(0.5 * (u0 + u1), 0.5)).x;
+                let range =
+                    (t.lookup(DVec2::new(u1, 0.5)).x - t.lookup(DVec2::new(u0, 0.5)).x).abs();
+                let mean = (0..16)
+                    .map(|y| f64::from(out.film.beauty[(y * W + x) as usize][0]))
+                    .sum::<f64>()
+                    / 16.0;
+                let tol = 5.0 * range / (12.0 * f64::from(SPP) * 16.0).sqrt() + 1e-5 * e;
+                assert!(
+                    (mean - e).abs() <= tol,
+                    "{filter:?}, {wrap:?}: column {x} at u {:.3} reads {mean}, expected {e} (± {tol})",
+                    0.5 * (u0 + u1)
+                );
+                checked += 1;
+            }
+            assert!(
+                checked >= 30,
+                "{filter:?}, {wrap:?}: only {checked} columns checked"
+            );
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}
