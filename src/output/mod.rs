@@ -5,6 +5,7 @@
 //! find them. The PNG is a display-referred preview of the beauty only.
 
 mod openexr;
+pub mod partial;
 mod png;
 
 use std::path::{Path, PathBuf};

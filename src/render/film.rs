@@ -1,11 +1,175 @@
-//! Film readback: per-pixel sums → means, AOVs, variance and the two half-buffers.
+//! The film: per-pixel sums of every plane (FilmPixel's 24 floats), moved off the device on a
+//! fixed grid of sample blocks and accumulated exactly, so that a render split into jobs (sample
+//! ranges, pixel windows) and merged is bit-identical to the render in one piece.
+//!
+//! - The device sums the samples of one block in float32: block k holds samples
+//!   [256 k, min(256 (k + 1), N)) of an N-sample render, counted from sample 0 whatever the job,
+//!   each dispatch taking them in index order. float32 sums of a block never depend on how the
+//!   render was split, so long as the whole block was rendered.
+//! - At each block's end its sums leave the device and are added here in fixed point (i128 with
+//!   a unit of 2^-40): integer addition is associative, so the total does not depend on the
+//!   order in which blocks or jobs are added. The unit resolves 9e-13 and the range reaches 1.5e26
+//!   (squared radiance of 1e8 over 2^30 samples); each block sum is rounded to it once,
+//!   deterministically.
+//! - A job whose sample range starts or ends inside a block renders that whole block (so that its
+//!   float32 sums are the ones a render in one piece makes) and keeps it apart as a
+//!   [`BoundaryBlock`]; merging takes each boundary block once, from whichever job has it.
 
 use crate::error::Result;
 use crate::layout::FilmPixel;
 use crate::output::Film;
 use crate::vk::{Buffer, Context};
 
-/// A film read back after `spp` samples per pixel.
+/// Samples per block of the film grid (and the most one invocation takes per dispatch).
+pub const FILM_BLOCK: u32 = 256;
+/// Floats per pixel in the device film (FilmPixel).
+pub const FILM_CHANNELS: usize = 24;
+/// Fixed-point unit of the exact sums: 2^-FIXED_BITS.
+const FIXED_BITS: i32 = 40;
+
+/// A float32 block sum in fixed point (NaN reads 0; out of range saturates).
+pub fn to_fixed(v: f32) -> i128 {
+    let x = (f64::from(v) * 2f64.powi(FIXED_BITS)).round();
+    if x.is_nan() { 0 } else { x as i128 }
+}
+
+/// A fixed-point sum as f64.
+pub fn from_fixed(s: i128) -> f64 {
+    s as f64 * 2f64.powi(-FIXED_BITS)
+}
+
+/// The block of sample `s` in an `n`-sample render: [start, end).
+pub fn block_of(s: u32, n: u32) -> (u32, u32) {
+    let start = s - s % FILM_BLOCK;
+    (start, (start + FILM_BLOCK).min(n))
+}
+
+/// A rectangle of pixels [x0, x1) x [y0, y1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Window {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl Window {
+    pub fn full(width: u32, height: u32) -> Window {
+        Window {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+    pub fn pixels(&self) -> usize {
+        self.width() as usize * self.height() as usize
+    }
+    pub fn overlaps(&self, o: &Window) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+}
+
+impl std::fmt::Display for Window {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
+}
+
+/// The float32 sums of one whole block [start, end) of which a job owns only part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoundaryBlock {
+    pub start: u32,
+    pub end: u32,
+    /// Window pixels, row-major.
+    pub sums: Vec<[f32; FILM_CHANNELS]>,
+}
+
+/// Exact sums of a job: its pixel window, the blocks it owns wholly (fixed point), and the blocks
+/// it owns partly (float32, whole).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmSums {
+    pub window: Window,
+    pub sums: Vec<[i128; FILM_CHANNELS]>,
+    pub boundary: Vec<BoundaryBlock>,
+}
+
+impl FilmSums {
+    pub fn new(window: Window) -> FilmSums {
+        FilmSums {
+            window,
+            sums: vec![[0; FILM_CHANNELS]; window.pixels()],
+            boundary: Vec::new(),
+        }
+    }
+
+    /// Adds float32 block sums (window pixels) exactly.
+    pub fn add_block(&mut self, block: &[[f32; FILM_CHANNELS]]) {
+        for (acc, p) in self.sums.iter_mut().zip(block) {
+            for (a, x) in acc.iter_mut().zip(p) {
+                *a += to_fixed(*x);
+            }
+        }
+    }
+
+    /// Adds another job's fixed-point sums of the same window.
+    pub fn add_sums(&mut self, other: &[[i128; FILM_CHANNELS]]) {
+        for (acc, p) in self.sums.iter_mut().zip(other) {
+            for (a, x) in acc.iter_mut().zip(p) {
+                *a += x;
+            }
+        }
+    }
+
+    /// The sums with the boundary blocks added: every sample this job rendered.
+    pub fn with_boundary(&self) -> Vec<[i128; FILM_CHANNELS]> {
+        let mut all = FilmSums::new(self.window);
+        all.sums.clone_from(&self.sums);
+        for b in &self.boundary {
+            all.add_block(&b.sums);
+        }
+        all.sums
+    }
+}
+
+/// Reads the device film's pixels inside `window` (the device film covers the whole frame of
+/// `width` pixels a row).
+pub fn download_window(
+    ctx: &Context,
+    film: &Buffer,
+    width: u32,
+    window: Window,
+) -> Result<Vec<[f32; FILM_CHANNELS]>> {
+    let rows = window.y1 as usize * width as usize;
+    let raw: Vec<FilmPixel> = ctx.download(film, rows)?;
+    let mut out = Vec::with_capacity(window.pixels());
+    for y in window.y0..window.y1 {
+        for x in window.x0..window.x1 {
+            let p = &raw[(y * width + x) as usize];
+            out.push(*bytemuck::cast_ref::<FilmPixel, [f32; FILM_CHANNELS]>(p));
+        }
+    }
+    Ok(out)
+}
+
+/// Clears the device film for the next block.
+pub fn clear(ctx: &Context, film: &Buffer) -> Result<()> {
+    ctx.one_shot(|cmd| {
+        // SAFETY: the film buffer is alive until the wait.
+        unsafe {
+            ctx.device
+                .cmd_fill_buffer(cmd, film.buffer, 0, ash::vk::WHOLE_SIZE, 0)
+        }
+    })
+}
+
+/// A film resolved from its sums after `spp` samples per pixel.
 pub struct Resolved {
     pub film: Film,
     pub spp: u32,
@@ -19,53 +183,18 @@ pub struct Resolved {
     pub rays: u64,
 }
 
-/// The film's sums in float64 on the host. The GPU film holds float32 sums of the samples since
-/// the last [`HostFilm::flush`], which moves them here and clears it: float32 sums of many samples
-/// round systematically (3.2e-4 low after 32768 samples of a constant pixel), short ones do not.
-pub struct HostFilm {
-    sums: Vec<[f64; 24]>,
-}
-
-impl HostFilm {
-    pub fn new(pixels: usize) -> HostFilm {
-        HostFilm {
-            sums: vec![[0.0; 24]; pixels],
-        }
-    }
-
-    pub fn flush(&mut self, ctx: &Context, film: &Buffer) -> Result<()> {
-        let raw: Vec<FilmPixel> = ctx.download(film, self.sums.len())?;
-        for (acc, p) in self.sums.iter_mut().zip(&raw) {
-            let v: &[f32; 24] = bytemuck::cast_ref(p);
-            for (a, x) in acc.iter_mut().zip(v) {
-                *a += f64::from(*x);
-            }
-        }
-        ctx.one_shot(|cmd| {
-            // SAFETY: the film buffer is alive until the wait.
-            unsafe {
-                ctx.device
-                    .cmd_fill_buffer(cmd, film.buffer, 0, ash::vk::WHOLE_SIZE, 0)
-            }
-        })
-    }
-}
-
 /// Beauty, emission, albedo and normal are averaged over all samples (misses count as 0, as
 /// denoisers expect); Z over the samples that hit (+inf where none did); Variance is the variance
-/// of the pixel mean, s² / n.
-pub fn resolve(host: &HostFilm, w: u32, h: u32, spp: u32) -> Resolved {
-    let raw = &host.sums;
-    let mut film = Film::new(w, h);
+/// of the pixel mean, s² / n. `sums` are the window's pixels, `width` x `height`.
+pub fn resolve(sums: &[[i128; FILM_CHANNELS]], width: u32, height: u32, spp: u32) -> Resolved {
+    let mut film = Film::new(width, height);
     let n = f64::from(spp);
     let n_even = f64::from(spp.div_ceil(2));
     let n_odd = f64::from(spp / 2);
-    let mut variance = vec![[0.0f32; 3]; raw.len()];
-    let mut even = vec![[0.0f32; 3]; raw.len()];
-    let mut odd = vec![[0.0f32; 3]; raw.len()];
-    let mut non_finite = 0u64;
-    let mut clamped = 0u64;
-    let mut rays = 0u64;
+    let mut variance = vec![[0.0f32; 3]; sums.len()];
+    let mut even = vec![[0.0f32; 3]; sums.len()];
+    let mut odd = vec![[0.0f32; 3]; sums.len()];
+    let (mut non_finite, mut clamped, mut rays) = (0u64, 0u64, 0u64);
     // Offsets of the FilmPixel members in the flattened sums.
     const BEAUTY: usize = 0;
     const BEAUTY_SQ: usize = 4;
@@ -73,7 +202,8 @@ pub fn resolve(host: &HostFilm, w: u32, h: u32, spp: u32) -> Resolved {
     const NORMAL: usize = 12;
     const EMISSION: usize = 16;
     const BEAUTY_ODD: usize = 20;
-    for (i, p) in raw.iter().enumerate() {
+    for (i, s) in sums.iter().enumerate() {
+        let p: [f64; FILM_CHANNELS] = std::array::from_fn(|k| from_fixed(s[k]));
         for c in 0..3 {
             let sum = p[BEAUTY + c];
             let mean = sum / n;
@@ -109,5 +239,32 @@ pub fn resolve(host: &HostFilm, w: u32, h: u32, spp: u32) -> Resolved {
         non_finite_samples: non_finite,
         clamped_samples: clamped,
         rays,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_is_exact_for_float32_sums_and_associative() {
+        for v in [0.0f32, 1.0, -2.5, 1e-3, 3.0e7, 1.1754944e-38, 1e16] {
+            let f = to_fixed(v);
+            if v.abs() >= 2f32.powi(-16) {
+                assert_eq!(from_fixed(f), f64::from(v), "{v}");
+            }
+        }
+        let xs = [0.1f32, 1e6, 3.3e-5, 7.0, 1e-9, 2.5e12];
+        let a: i128 = xs.iter().map(|&x| to_fixed(x)).sum();
+        let b: i128 = xs.iter().rev().map(|&x| to_fixed(x)).sum();
+        assert_eq!(a, b);
+        assert_eq!(to_fixed(f32::NAN), 0);
+    }
+
+    #[test]
+    fn blocks_are_counted_from_sample_zero() {
+        assert_eq!(block_of(0, 1000), (0, 256));
+        assert_eq!(block_of(300, 1000), (256, 512));
+        assert_eq!(block_of(999, 1000), (768, 1000));
     }
 }

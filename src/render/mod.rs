@@ -7,13 +7,15 @@
 //! even and odd half-buffers (see [`crate::metrics`]).
 
 pub mod dome;
-mod film;
+pub mod film;
+pub mod job;
 mod lights;
 mod primary;
 mod probe;
 mod upload;
 
-pub use film::Resolved;
+use film::FILM_BLOCK;
+pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use upload::GpuScene;
 
 use crate::error::{Error, Result};
@@ -110,6 +112,34 @@ pub struct RenderSettings {
     /// samples are counted and kept out of the image.
     #[doc(hidden)]
     pub inject_non_finite: u32,
+    /// Render only samples [A, B) of the `spp`-sample image (a job of a split render; film.rs).
+    pub samples: Option<(u32, u32)>,
+    /// Render only this pixel window.
+    pub crop: Option<Window>,
+}
+
+impl RenderSettings {
+    /// The job's sample range and pixel window, checked against the image.
+    pub fn job(&self, width: u32, height: u32) -> Result<((u32, u32), Window)> {
+        let range = self.samples.unwrap_or((0, self.spp));
+        if !(range.0 < range.1 && range.1 <= self.spp) {
+            return Err(Error::Invalid(format!(
+                "sample range {}..{} must be non-empty and within 0..{} (the image's spp)",
+                range.0, range.1, self.spp
+            )));
+        }
+        let window = self.crop.unwrap_or(Window::full(width, height));
+        if !(window.x0 < window.x1
+            && window.y0 < window.y1
+            && window.x1 <= width
+            && window.y1 <= height)
+        {
+            return Err(Error::Invalid(format!(
+                "crop {window} must be a non-empty window within the {width}x{height} image"
+            )));
+        }
+        Ok((range, window))
+    }
 }
 
 impl Default for RenderSettings {
@@ -125,6 +155,8 @@ impl Default for RenderSettings {
             evaluate_passes: false,
             clamp: None,
             inject_non_finite: 0,
+            samples: None,
+            crop: None,
         }
     }
 }
@@ -178,12 +210,19 @@ pub struct RenderOutput {
     pub stats: RenderStats,
     /// One entry per pass when passes were evaluated; else only the last.
     pub passes: Vec<PassReport>,
+    /// The exact sums behind the film: what a split render's jobs merge.
+    pub job: JobSums,
 }
 
-/// Most samples per pixel the device film sums in float32 before the host moves them into float64
-/// (long float32 running sums round systematically); also the most samples one invocation takes
-/// per dispatch, which keeps dispatches short (desktop watchdogs).
-const FILM_FLUSH_SAMPLES: u32 = 256;
+/// The exact film sums of a render or of one job of a split render (src/render/film.rs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JobSums {
+    /// Samples [A, B) of every pixel of the window that the sums own.
+    pub range: (u32, u32),
+    /// Samples per pixel of the whole image.
+    pub total_spp: u32,
+    pub sums: FilmSums,
+}
 
 pub struct Renderer {
     ctx: Context,
@@ -237,6 +276,13 @@ impl Renderer {
         }
         let (w, h) = (scene.camera.width, scene.camera.height);
         let pixels = u64::from(w) * u64::from(h);
+        let (range, window) = settings.job(w, h)?;
+        let job = range != (0, settings.spp) || window != Window::full(w, h);
+        if job && (settings.time.is_some() || settings.reference.is_some()) {
+            return Err(Error::Invalid(
+                "a sample range or crop renders part of an image: it takes --spp, not --time or --reference".into(),
+            ));
+        }
         if let Some(r) = &settings.reference
             && r.len() as u64 != pixels
         {
@@ -286,7 +332,7 @@ impl Renderer {
             std::slice::from_ref(&gpu.frame),
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
-        let film = ctx.create_buffer(
+        let film_buffer = ctx.create_buffer(
             "film",
             pixels * std::mem::size_of::<FilmPixel>() as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER
@@ -298,10 +344,10 @@ impl Renderer {
             // SAFETY: the film buffer is alive until the wait.
             unsafe {
                 ctx.device
-                    .cmd_fill_buffer(cmd, film.buffer, 0, vk::WHOLE_SIZE, 0)
+                    .cmd_fill_buffer(cmd, film_buffer.buffer, 0, vk::WHOLE_SIZE, 0)
             }
         })?;
-        let kernel = PrimaryKernel::new(ctx, &gpu, &trace, &frame, &film)?;
+        let kernel = PrimaryKernel::new(ctx, &gpu, &trace, &frame, &film_buffer)?;
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
 
@@ -321,24 +367,28 @@ impl Renderer {
         let warmup_seconds = warm.elapsed().as_secs_f64();
         let setup_seconds = t0.elapsed().as_secs_f64();
 
-        // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows.
+        // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows,
+        // never across a film block (film.rs): blocks leave the device whole.
         const TILE: u32 = 512;
-        let tile_pixels = u64::from(w.min(TILE)) * u64::from(h.min(TILE));
+        let tile_pixels =
+            u64::from(window.width().min(TILE)) * u64::from(window.height().min(TILE));
         let per_dispatch = if self.loop_limited()? {
             1
         } else {
-            (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_FLUSH_SAMPLES))
-                as u32
+            (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_BLOCK)) as u32
         };
+        // The samples this job renders: its range widened to whole blocks.
+        let first = film::block_of(range.0, settings.spp).0;
+        let last = film::block_of(range.1 - 1, settings.spp).1;
+        let budget = last - first;
         let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
-        let mut host = film::HostFilm::new(pixels as usize);
-        let mut since_flush = 0u32;
+        let mut sums = FilmSums::new(window);
         let mut passes = Vec::new();
-        let mut last = None;
-        while done < settings.spp {
+        let mut last_resolved = None;
+        while done < budget {
             // Passes grow by half the samples so far (log-spaced points on the error curve);
             // under a time budget a pass is sized to the time left at the measured rate.
-            let mut pass = (done / 2).max(1).min(settings.spp - done);
+            let mut pass = (done / 2).max(1).min(budget - done);
             if let Some(t) = settings.time {
                 if wall >= t {
                     break;
@@ -351,15 +401,17 @@ impl Renderer {
             let start = Instant::now();
             let mut k = 0;
             while k < pass {
-                let n = per_dispatch.min(pass - k);
-                for y0 in (0..h).step_by(TILE as usize) {
-                    for x0 in (0..w).step_by(TILE as usize) {
+                let s = first + done + k;
+                let (block_start, block_end) = film::block_of(s, settings.spp);
+                let n = per_dispatch.min(pass - k).min(block_end - s);
+                for y0 in (window.y0..window.y1).step_by(TILE as usize) {
+                    for x0 in (window.x0..window.x1).step_by(TILE as usize) {
                         let pc = PassConstants {
-                            first_sample: done + k,
+                            first_sample: s,
                             sample_count: n,
                             seed_lo: settings.seed as u32,
                             seed_hi: (settings.seed >> 32) as u32,
-                            tile: [x0, y0, TILE.min(w - x0), TILE.min(h - y0)],
+                            tile: [x0, y0, TILE.min(window.x1 - x0), TILE.min(window.y1 - y0)],
                         };
                         ctx.one_shot(|cmd| {
                             if let Some(t) = &timer {
@@ -376,12 +428,22 @@ impl Renderer {
                     }
                 }
                 k += n;
-                since_flush += n;
-                if since_flush >= FILM_FLUSH_SAMPLES {
-                    host.flush(ctx, &film)?;
-                    since_flush = 0;
+                if s + n == block_end {
+                    // The block is complete: exact sums if the job owns all of it, else kept
+                    // whole as a boundary block.
+                    let block = film::download_window(ctx, &film_buffer, w, window)?;
+                    if block_start >= range.0 && block_end <= range.1 {
+                        sums.add_block(&block);
+                    } else {
+                        sums.boundary.push(BoundaryBlock {
+                            start: block_start,
+                            end: block_end,
+                            sums: block,
+                        });
+                    }
+                    film::clear(ctx, &film_buffer)?;
                 }
-                progress(done + k, settings.spp);
+                progress(done + k, budget);
             }
             done += pass;
             let elapsed = start.elapsed().as_secs_f64();
@@ -397,23 +459,29 @@ impl Renderer {
                 ..Default::default()
             };
             if evaluate {
-                host.flush(ctx, &film)?;
-                since_flush = 0;
-                let r = film::resolve(&host, w, h, done);
+                // Reads the unfinished block without moving it: the block grid stays fixed.
+                let mut peek = FilmSums::new(window);
+                peek.sums = sums.with_boundary();
+                if (first + done) % FILM_BLOCK != 0 && first + done != last {
+                    peek.add_block(&film::download_window(ctx, &film_buffer, w, window)?);
+                }
+                let r = film::resolve(&peek.sums, window.width(), window.height(), done);
                 evaluate_pass(&mut report, &r, settings.reference.as_deref());
                 passes.push(report);
-                last = Some(r);
+                last_resolved = Some(r);
             } else {
                 passes.clear();
                 passes.push(report);
             }
         }
-        let resolved = match last {
+        if done < budget {
+            // A time budget ended the render inside a block: keep what was rendered.
+            let block = film::download_window(ctx, &film_buffer, w, window)?;
+            sums.add_block(&block);
+        }
+        let resolved = match last_resolved {
             Some(r) if r.spp == done => r,
-            _ => {
-                host.flush(ctx, &film)?;
-                film::resolve(&host, w, h, done)
-            }
+            _ => film::resolve(&sums.with_boundary(), window.width(), window.height(), done),
         };
         if !evaluate && let Some(p) = passes.last_mut() {
             evaluate_pass(p, &resolved, settings.reference.as_deref());
@@ -437,6 +505,11 @@ impl Renderer {
             },
             film: resolved.film,
             passes,
+            job: JobSums {
+                range: (range.0, range.1.min(first + done)),
+                total_spp: settings.spp,
+                sums,
+            },
         })
     }
 }

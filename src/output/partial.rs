@@ -1,0 +1,262 @@
+//! Partial EXRs: one job of a split render (a sample range and/or a pixel window), holding its
+//! exact film sums so that `illum merge` can rebuild the image bit for bit (src/render/film.rs).
+//!
+//! The data window is the job's pixel window. Channels (all sorted by name, as EXR wants):
+//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128, unit 2^-40) of each of the 24
+//!   film channels [`PLANES`], as four little-endian 32-bit words (UINT channels, w0 lowest);
+//! - `block<k>.<plane>` (k = 0, 1): float32 sums of a whole film block that the job owns only
+//!   partly, with its sample range in the header attribute `illum.block<k>` = "start..end".
+//!
+//! Header attributes (text): `illum.partial` = "1", `illum.samples` = "A..B", `illum.crop` =
+//! "x0,y0,x1,y1", `illum.frame` = "WxH", `illum.spp` (of the whole image), `illum.seed`,
+//! `illum.sceneHash`, `illum.settings`, `illum.trace`, `illum.version`, `illum.device`,
+//! `illum.renderSeconds`, `illum.setupSeconds`.
+
+use super::OutputError;
+use crate::render::film::{BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
+use exr::prelude::*;
+use std::path::Path;
+
+/// Names of the 24 film channels (FilmPixel, glsl/shared/layout.glsl), in order.
+pub const PLANES: [&str; FILM_CHANNELS] = [
+    "beauty.r",
+    "beauty.g",
+    "beauty.b",
+    "clamped",
+    "beauty_sq.r",
+    "beauty_sq.g",
+    "beauty_sq.b",
+    "rays",
+    "albedo.r",
+    "albedo.g",
+    "albedo.b",
+    "hits",
+    "normal.x",
+    "normal.y",
+    "normal.z",
+    "depth",
+    "emission.r",
+    "emission.g",
+    "emission.b",
+    "non_finite",
+    "odd.r",
+    "odd.g",
+    "odd.b",
+    "odd.unused",
+];
+
+/// What a partial EXR says about its job, besides the sums.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartInfo {
+    pub samples: (u32, u32),
+    pub window: Window,
+    pub frame: (u32, u32),
+    pub spp: u32,
+    pub seed: u64,
+    /// Hash of the validated scene (src/scene: `Scene::content_hash`), hex.
+    pub scene_hash: String,
+    /// Every setting that changes the samples (integrator, clamp), as text.
+    pub settings: String,
+    pub trace: String,
+    pub version: String,
+    pub device: String,
+    pub render_seconds: f64,
+    pub setup_seconds: f64,
+}
+
+/// Writes a job's sums and description to `path`.
+pub fn write_partial(
+    path: &Path,
+    info: &PartInfo,
+    sums: &FilmSums,
+) -> std::result::Result<(), OutputError> {
+    let write_err = |cause| OutputError::ExrWrite {
+        path: path.to_path_buf(),
+        cause,
+    };
+    let w = sums.window;
+    let n = w.pixels();
+    let mut channels = Vec::new();
+    for (c, plane) in PLANES.iter().enumerate() {
+        for word in 0..4 {
+            let data: Vec<u32> = sums
+                .sums
+                .iter()
+                .map(|p| (p[c] as u128 >> (32 * word)) as u32)
+                .collect();
+            channels.push(AnyChannel::new(
+                Text::from(format!("sum.{plane}.w{word}").as_str()),
+                FlatSamples::U32(data),
+            ));
+        }
+    }
+    let mut attributes = LayerAttributes::named(Text::from("partial"));
+    let mut put = |name: &str, value: String| {
+        attributes.other.insert(
+            Text::from(name),
+            AttributeValue::Text(Text::from(value.as_str())),
+        );
+    };
+    for (k, b) in sums.boundary.iter().enumerate() {
+        for (c, plane) in PLANES.iter().enumerate() {
+            let data: Vec<f32> = b.sums.iter().map(|p| p[c]).collect();
+            channels.push(AnyChannel::new(
+                Text::from(format!("block{k}.{plane}").as_str()),
+                FlatSamples::F32(data),
+            ));
+        }
+        put(
+            &format!("illum.block{k}"),
+            format!("{}..{}", b.start, b.end),
+        );
+    }
+    put("illum.partial", "1".into());
+    put(
+        "illum.samples",
+        format!("{}..{}", info.samples.0, info.samples.1),
+    );
+    put("illum.crop", info.window.to_string());
+    put("illum.frame", format!("{}x{}", info.frame.0, info.frame.1));
+    put("illum.spp", info.spp.to_string());
+    put("illum.seed", info.seed.to_string());
+    put("illum.sceneHash", info.scene_hash.clone());
+    put("illum.settings", info.settings.clone());
+    put("illum.trace", info.trace.clone());
+    put("illum.version", info.version.clone());
+    put("illum.device", info.device.clone());
+    put("illum.renderSeconds", info.render_seconds.to_string());
+    put("illum.setupSeconds", info.setup_seconds.to_string());
+    debug_assert!(channels.iter().all(|c| c.sample_data.len() == n));
+    let layer = Layer::new(
+        (w.width() as usize, w.height() as usize),
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(write_err)
+}
+
+/// Reads a partial EXR written by [`write_partial`].
+pub fn read_partial(path: &Path) -> std::result::Result<(PartInfo, FilmSums), OutputError> {
+    let bad = |reason: String| OutputError::ExrUnsupported {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|cause| OutputError::ExrRead {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+    let layer = image
+        .layer_data
+        .into_iter()
+        .next()
+        .ok_or_else(|| bad("no parts".into()))?;
+    let attr = |name: &str| -> std::result::Result<String, OutputError> {
+        match layer.attributes.other.get(&Text::from(name)) {
+            Some(AttributeValue::Text(t)) => Ok(t.to_string()),
+            _ => Err(bad(format!(
+                "not a partial render of illum (no text attribute {name}; write one with illum render --samples or --crop)"
+            ))),
+        }
+    };
+    if attr("illum.partial")? != "1" {
+        return Err(bad("illum.partial is not 1".into()));
+    }
+    let parse_range = |name: &str| -> std::result::Result<(u32, u32), OutputError> {
+        let v = attr(name)?;
+        v.split_once("..")
+            .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
+            .ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))
+    };
+    let num = |name: &str| -> std::result::Result<f64, OutputError> {
+        let v = attr(name)?;
+        v.parse()
+            .map_err(|_| bad(format!("{name} = {v:?} is not a number")))
+    };
+    let crop = attr("illum.crop")?;
+    let c: Vec<u32> = crop.split(',').filter_map(|x| x.parse().ok()).collect();
+    let [x0, y0, x1, y1] = c[..] else {
+        return Err(bad(format!("illum.crop = {crop:?} is not x0,y0,x1,y1")));
+    };
+    let window = Window { x0, y0, x1, y1 };
+    let frame_text = attr("illum.frame")?;
+    let frame = frame_text
+        .split_once('x')
+        .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
+        .ok_or_else(|| bad(format!("illum.frame = {frame_text:?} is not WxH")))?;
+    let info = PartInfo {
+        samples: parse_range("illum.samples")?,
+        window,
+        frame,
+        spp: num("illum.spp")? as u32,
+        seed: attr("illum.seed")?
+            .parse()
+            .map_err(|_| bad("illum.seed is not a number".into()))?,
+        scene_hash: attr("illum.sceneHash")?,
+        settings: attr("illum.settings")?,
+        trace: attr("illum.trace")?,
+        version: attr("illum.version")?,
+        device: attr("illum.device")?,
+        render_seconds: num("illum.renderSeconds")?,
+        setup_seconds: num("illum.setupSeconds")?,
+    };
+    let size = (window.width() as usize, window.height() as usize);
+    if layer.size != size.into() {
+        return Err(bad(format!(
+            "data window {}x{} does not match illum.crop {window}",
+            layer.size.0, layer.size.1
+        )));
+    }
+    let n = window.pixels();
+    let channel = |name: &str| {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == *name)
+            .map(|c| &c.sample_data)
+    };
+    let mut sums = FilmSums::new(window);
+    for (c, plane) in PLANES.iter().enumerate() {
+        for word in 0..4 {
+            let name = format!("sum.{plane}.w{word}");
+            let Some(FlatSamples::U32(v)) = channel(&name) else {
+                return Err(bad(format!("missing UINT channel {name}")));
+            };
+            for (p, &x) in sums.sums.iter_mut().zip(v) {
+                p[c] = (p[c] as u128 | u128::from(x) << (32 * word)) as i128;
+            }
+        }
+    }
+    for k in 0..2 {
+        let Ok(range) = parse_range(&format!("illum.block{k}")) else {
+            continue;
+        };
+        let mut block = BoundaryBlock {
+            start: range.0,
+            end: range.1,
+            sums: vec![[0.0; FILM_CHANNELS]; n],
+        };
+        for (c, plane) in PLANES.iter().enumerate() {
+            let name = format!("block{k}.{plane}");
+            let Some(FlatSamples::F32(v)) = channel(&name) else {
+                return Err(bad(format!("missing FLOAT channel {name}")));
+            };
+            for (p, &x) in block.sums.iter_mut().zip(v) {
+                p[c] = x;
+            }
+        }
+        sums.boundary.push(block);
+    }
+    Ok((info, sums))
+}

@@ -1,0 +1,292 @@
+//! Split renders: the jobs of one image (sample ranges and/or pixel windows, each written as a
+//! partial EXR, src/output/partial.rs) and their exact merge. Merged jobs give the image a render
+//! in one piece gives, bit for bit, because every film block is rendered whole by the jobs that
+//! share it and block sums add exactly (src/render/film.rs).
+
+use super::film::{self, FILM_CHANNELS, FilmSums, Window};
+use super::{RenderOutput, RenderSettings};
+use crate::error::{Error, Result};
+use crate::output::Film;
+use crate::output::partial::PartInfo;
+use crate::scene::Scene;
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+/// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
+pub fn settings_text(s: &RenderSettings) -> String {
+    let it = &s.integrator;
+    format!(
+        "technique={} light_samples={} brdf_samples={} diffuse_mis={} clamp={} nan_every={}",
+        it.technique.name(),
+        it.light_samples,
+        it.brdf_samples,
+        it.diffuse_mis,
+        s.clamp.map_or("off".into(), |c| c.to_string()),
+        s.inject_non_finite
+    )
+}
+
+/// FNV-1a, 64 bits: a stable hash (std's hashers may change between Rust releases).
+struct Fnv(u64);
+
+impl Fnv {
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 = (self.0 ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+/// A hash of everything in the validated scene that reaches the image (geometry, materials,
+/// lights, textures, camera), as 16 hex digits; the scene's file name and description are left
+/// out, so a copied scene file on another machine hashes the same.
+pub fn scene_hash(scene: &Scene) -> String {
+    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    h.write(format!("{:?}", scene.camera).as_bytes());
+    h.write(format!("{:?}", scene.materials).as_bytes());
+    h.write(format!("{:?}", scene.shapes).as_bytes());
+    h.write(format!("{:?}", scene.lights).as_bytes());
+    h.write(format!("{:?}", scene.instances).as_bytes());
+    for m in &scene.meshes {
+        h.write(format!("{} {:?}", m.name, m.material).as_bytes());
+        h.write(bytemuck::cast_slice(&m.indices));
+        for p in &m.positions {
+            h.write(bytemuck::cast_slice(&p.to_array()));
+        }
+        for n in m.normals.iter().flatten() {
+            h.write(bytemuck::cast_slice(&n.to_array()));
+        }
+        for t in m.tangents.iter().flatten() {
+            h.write(bytemuck::cast_slice(&t.to_array()));
+        }
+        for uv in m.uvs.iter().flatten() {
+            h.write(bytemuck::cast_slice(&uv.to_array()));
+        }
+    }
+    for t in &scene.textures {
+        h.write(
+            format!(
+                "{} {}x{} {:?} {:?}",
+                t.name, t.width, t.height, t.filter, t.wrap
+            )
+            .as_bytes(),
+        );
+        for v in &t.texels {
+            h.write(bytemuck::cast_slice(&v.to_array()));
+        }
+    }
+    format!("{:016x}", h.0)
+}
+
+/// The description a render's job writes beside its sums.
+pub fn part_info(
+    scene: &Scene,
+    settings: &RenderSettings,
+    out: &RenderOutput,
+    device: &str,
+) -> PartInfo {
+    PartInfo {
+        samples: out.job.range,
+        window: out.job.sums.window,
+        frame: (scene.camera.width, scene.camera.height),
+        spp: out.job.total_spp,
+        seed: settings.seed,
+        scene_hash: scene_hash(scene),
+        settings: settings_text(settings),
+        trace: out.stats.trace.to_string(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        device: device.to_string(),
+        render_seconds: out.stats.render_seconds,
+        setup_seconds: out.stats.setup_seconds,
+    }
+}
+
+/// One job read back: where it came from, what it says, its sums.
+pub struct Part {
+    pub path: PathBuf,
+    pub info: PartInfo,
+    pub sums: FilmSums,
+}
+
+/// The image rebuilt from its jobs.
+pub struct Merged {
+    pub film: Film,
+    pub spp: u32,
+    pub seed: u64,
+    pub trace: String,
+    pub settings: String,
+    /// Summed over the jobs.
+    pub render_seconds: f64,
+    pub setup_seconds: f64,
+    pub devices: Vec<String>,
+    pub non_finite_samples: u64,
+    pub clamped_samples: u64,
+    pub rays: u64,
+}
+
+fn part_error(p: &Part, field: &str, message: String) -> Error {
+    Error::Invalid(format!("{} ({field}): {message}", p.path.display()))
+}
+
+/// Checks that `parts` are the jobs of one image (same scene, seed, samples per pixel, settings
+/// and trace path; windows that tile the frame; per window, sample ranges that tile 0..spp) and
+/// adds them up exactly. Errors name the part and the field.
+pub fn merge(parts: &[Part]) -> Result<Merged> {
+    let first = parts
+        .first()
+        .ok_or_else(|| Error::Invalid("illum merge: no parts given".into()))?;
+    let f = &first.info;
+    for p in &parts[1..] {
+        let i = &p.info;
+        let checks: [(&str, String, String); 7] = [
+            (
+                "illum.sceneHash",
+                i.scene_hash.clone(),
+                f.scene_hash.clone(),
+            ),
+            ("illum.seed", i.seed.to_string(), f.seed.to_string()),
+            ("illum.spp", i.spp.to_string(), f.spp.to_string()),
+            (
+                "illum.frame",
+                format!("{:?}", i.frame),
+                format!("{:?}", f.frame),
+            ),
+            ("illum.settings", i.settings.clone(), f.settings.clone()),
+            ("illum.trace", i.trace.clone(), f.trace.clone()),
+            ("illum.version", i.version.clone(), f.version.clone()),
+        ];
+        for (field, got, want) in checks {
+            if got != want {
+                return Err(part_error(
+                    p,
+                    field,
+                    format!(
+                        "{got} where {} has {want}: not a job of the same image",
+                        first.path.display()
+                    ),
+                ));
+            }
+        }
+    }
+    let (w, h) = f.frame;
+    let spp = f.spp;
+    // Windows: identical or disjoint, and together the whole frame.
+    let mut windows: Vec<Window> = Vec::new();
+    for p in parts {
+        let win = p.info.window;
+        if win.x1 > w || win.y1 > h || win.x0 >= win.x1 || win.y0 >= win.y1 {
+            return Err(part_error(
+                p,
+                "illum.crop",
+                format!("{win} is not a window of the {w}x{h} frame"),
+            ));
+        }
+        if let Some(o) = windows.iter().find(|o| **o != win && o.overlaps(&win)) {
+            return Err(part_error(
+                p,
+                "illum.crop",
+                format!(
+                    "{win} overlaps the window {o} of another part (a part from another crop grid?)"
+                ),
+            ));
+        }
+        if !windows.contains(&win) {
+            windows.push(win);
+        }
+    }
+    let covered: usize = windows.iter().map(Window::pixels).sum();
+    if covered != w as usize * h as usize {
+        return Err(Error::Invalid(format!(
+            "illum merge: the parts' windows cover {covered} of the {w}x{h} frame's {} pixels (a tile is missing)",
+            w as usize * h as usize
+        )));
+    }
+    // Per window: sample ranges that tile 0..spp.
+    let mut sums = vec![[0i128; FILM_CHANNELS]; w as usize * h as usize];
+    for win in &windows {
+        let mut here: Vec<&Part> = parts.iter().filter(|p| p.info.window == *win).collect();
+        here.sort_by_key(|p| p.info.samples);
+        let mut next = 0;
+        for (k, p) in here.iter().enumerate() {
+            let (a, b) = p.info.samples;
+            if a < next {
+                return Err(part_error(
+                    p,
+                    "illum.samples",
+                    format!(
+                        "{a}..{b} overlaps {}..{} of {}",
+                        here[k - 1].info.samples.0,
+                        here[k - 1].info.samples.1,
+                        here[k - 1].path.display()
+                    ),
+                ));
+            }
+            if a > next {
+                return Err(Error::Invalid(format!(
+                    "illum merge: samples {next}..{a} of window {win} are in no part (a part is missing)"
+                )));
+            }
+            next = b;
+        }
+        if next != spp {
+            return Err(Error::Invalid(format!(
+                "illum merge: samples {next}..{spp} of window {win} are in no part (a part is missing)"
+            )));
+        }
+        // Exact sums of the wholly owned blocks, then each shared block once.
+        let mut acc = FilmSums::new(*win);
+        let mut blocks: HashMap<(u32, u32), (&Part, &film::BoundaryBlock)> = HashMap::new();
+        for p in &here {
+            acc.add_sums(&p.sums.sums);
+            for b in &p.sums.boundary {
+                match blocks.get(&(b.start, b.end)) {
+                    Some((q, other)) if other.sums != b.sums => {
+                        return Err(part_error(
+                            p,
+                            "block",
+                            format!(
+                                "its samples {}..{} differ from those of {}",
+                                b.start,
+                                b.end,
+                                q.path.display()
+                            ),
+                        ));
+                    }
+                    Some(_) => {}
+                    None => {
+                        blocks.insert((b.start, b.end), (p, b));
+                    }
+                }
+            }
+        }
+        let mut keys: Vec<_> = blocks.keys().copied().collect();
+        keys.sort_unstable();
+        for key in keys {
+            acc.add_block(&blocks[&key].1.sums);
+        }
+        for (i, s) in acc.sums.iter().enumerate() {
+            let (x, y) = (
+                win.x0 + i as u32 % win.width(),
+                win.y0 + i as u32 / win.width(),
+            );
+            sums[(y * w + x) as usize] = *s;
+        }
+    }
+    let r = film::resolve(&sums, w, h, spp);
+    let mut devices: Vec<String> = parts.iter().map(|p| p.info.device.clone()).collect();
+    devices.sort();
+    devices.dedup();
+    Ok(Merged {
+        film: r.film,
+        spp,
+        seed: f.seed,
+        trace: f.trace.clone(),
+        settings: f.settings.clone(),
+        render_seconds: parts.iter().map(|p| p.info.render_seconds).sum(),
+        setup_seconds: parts.iter().map(|p| p.info.setup_seconds).sum(),
+        devices,
+        non_finite_samples: r.non_finite_samples,
+        clamped_samples: r.clamped_samples,
+        rays: r.rays,
+    })
+}
