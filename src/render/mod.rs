@@ -25,6 +25,8 @@ use crate::trace::{TraceMode, TraceStructure};
 use crate::vk::{Context, GpuTimer, MemoryLocation};
 use ash::vk;
 use primary::PrimaryKernel;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// How direct lighting is estimated (TECHNIQUES.md §3).
@@ -106,6 +108,10 @@ pub struct RenderSettings {
     /// Firefly clamp: the most luminance one camera sample's direct lighting may have (scaled
     /// down, hue kept, above it). None: off, the default. It biases the image (TECHNIQUES 7.6).
     pub clamp: Option<f32>,
+    /// Set it (from another thread or a signal handler) to stop the render after the current
+    /// round of dispatches: the output then holds the samples done so far (at least one per
+    /// pixel) and says [`RenderStats::interrupted`].
+    pub cancel: Option<Arc<AtomicBool>>,
     /// Test hook: make every n-th sample of each pixel NaN (0: off), to check that non-finite
     /// samples are counted and kept out of the image.
     #[doc(hidden)]
@@ -124,6 +130,7 @@ impl Default for RenderSettings {
             reference: None,
             evaluate_passes: false,
             clamp: None,
+            cancel: None,
             inject_non_finite: 0,
         }
     }
@@ -171,6 +178,8 @@ pub struct RenderStats {
     /// Camera samples whose direct lighting the firefly clamp reduced (0 when it is off).
     pub clamped_samples: u64,
     pub trace: &'static str,
+    /// The render stopped early through [`RenderSettings::cancel`]; `spp` says how far it got.
+    pub interrupted: bool,
 }
 
 pub struct RenderOutput {
@@ -214,7 +223,8 @@ impl Renderer {
     }
 
     /// Renders `scene` at its camera's resolution. `progress(spp_done, spp_budget)` is called
-    /// after every submission (with a time budget, spp_budget is the cap).
+    /// once with 0 samples when set-up (kernel compilation, upload, build, warm-up) is over, then
+    /// after every round of dispatches (with a time budget, spp_budget is the cap).
     pub fn render(
         &self,
         scene: &Scene,
@@ -320,6 +330,14 @@ impl Renderer {
         })?;
         let warmup_seconds = warm.elapsed().as_secs_f64();
         let setup_seconds = t0.elapsed().as_secs_f64();
+        progress(0, settings.spp);
+        let cancelled = || {
+            settings
+                .cancel
+                .as_ref()
+                .is_some_and(|c| c.load(Ordering::Relaxed))
+        };
+        let mut interrupted = false;
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows.
         const TILE: u32 = 512;
@@ -335,7 +353,7 @@ impl Renderer {
         let mut since_flush = 0u32;
         let mut passes = Vec::new();
         let mut last = None;
-        while done < settings.spp {
+        while done < settings.spp && !interrupted {
             // Passes grow by half the samples so far (log-spaced points on the error curve);
             // under a time budget a pass is sized to the time left at the measured rate.
             let mut pass = (done / 2).max(1).min(settings.spp - done);
@@ -382,8 +400,13 @@ impl Renderer {
                     since_flush = 0;
                 }
                 progress(done + k, settings.spp);
+                if cancelled() {
+                    // Every pixel has done + k samples: stop here, keeping them.
+                    interrupted = true;
+                    break;
+                }
             }
-            done += pass;
+            done += k;
             let elapsed = start.elapsed().as_secs_f64();
             wall += elapsed;
             if timer.is_none() {
@@ -434,6 +457,7 @@ impl Renderer {
                 dark_lights: gpu.dark_lights.clone(),
                 emitters: gpu.emitters,
                 clamped_samples: resolved.clamped_samples,
+                interrupted,
             },
             film: resolved.film,
             passes,
