@@ -11,6 +11,10 @@ pub enum Error {
         "cannot load the Vulkan library: {0} (install libvulkan1 and a driver, e.g. scripts/setup-debian.sh)"
     )]
     Loader(String),
+    #[error(
+        "Vulkan validation was requested (--validate or ILLUM_VALIDATION=1) but the layer {0} is not installed; the Vulkan library itself loaded fine (install vulkan-validationlayers, or leave validation off)"
+    )]
+    MissingLayer(String),
     #[error("no usable Vulkan device: {0}")]
     NoDevice(String),
     #[error("device \"{device}\" cannot run illum: {what}")]

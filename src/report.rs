@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 use crate::metrics::RELMSE_EPSILON;
-use crate::output::Film;
+use crate::output::{Film, write_atomically};
 use crate::render::PassReport;
 use plotters::prelude::*;
 use std::io::Write;
@@ -47,9 +47,21 @@ pub fn write_csv(path: &Path, passes: &[PassReport]) -> Result<()> {
             p.non_finite_samples
         );
     }
-    std::fs::File::create(path)
-        .and_then(|mut f| f.write_all(s.as_bytes()))
-        .map_err(|e| io(path, e))
+    write_atomically(path, |tmp| {
+        std::fs::File::create(tmp)
+            .and_then(|mut f| f.write_all(s.as_bytes()))
+            .map_err(|e| io(path, e))
+    })
+}
+
+/// Writes an RGB8 buffer as PNG (through a temporary file, like every output).
+fn save_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
+    let image = image::RgbImage::from_raw(w, h, buf).expect("buffer size");
+    write_atomically(path, |tmp| {
+        image
+            .save_with_format(tmp, image::ImageFormat::Png)
+            .map_err(|e| io(path, e))
+    })
 }
 
 /// A named curve of (seconds, error) points.
@@ -132,10 +144,7 @@ pub fn plot_error(path: &Path, title: &str, y_label: &str, series: &[Series]) ->
             .map_err(|x| e(&x))?;
         root.present().map_err(|x| e(&x))?;
     }
-    image::RgbImage::from_raw(w, h, buf)
-        .expect("buffer size")
-        .save(path)
-        .map_err(|e| io(path, e))
+    save_png(path, w, h, buf)
 }
 
 fn srgb(v: f32) -> u8 {
@@ -239,8 +248,5 @@ pub fn image_strip(path: &Path, panels: &[Panel]) -> Result<()> {
         .map_err(|e| io(path, e))?;
         root.present().map_err(|e| io(path, e))?;
     }
-    image::RgbImage::from_raw(w, h, buf)
-        .expect("buffer size")
-        .save(path)
-        .map_err(|e| io(path, e))
+    save_png(path, w, h, buf)
 }

@@ -47,6 +47,8 @@ fn renders_the_default_scene_to_exr_and_png() {
     let img = illum::output::read_exr(&png.with_extension("exr")).unwrap();
     let wall = start.elapsed().as_secs_f64();
     assert_eq!(img.width, 48);
+    // --width keeps the camera's aspect (the default scene is 2:1).
+    assert_eq!(img.height, 24);
     assert!(img.channel("Albedo.R").is_some());
     let seconds = |name: &str| -> f64 {
         img.attribute(name)
@@ -203,6 +205,165 @@ fn compare_writes_table_plot_and_strip_and_matches_a_separate_render() {
         assert!(
             (separate - relmse).abs() <= 1e-4 * relmse,
             "{technique}: compare says {relmse}, render says {separate}"
+        );
+    }
+}
+
+fn write_scene(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let path = common::temp_path(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+const SMALL_SCENE: &str = r#"{"camera": {"position": [0,0,5], "look_at": [0,0,0], "fov_y": 40, "resolution": [8, 8]},
+    "materials": {"m": {}},
+    "shapes": {"ball": {"sphere": {"center": [0,0,0], "radius": 1}, "material": "m"}},
+    "lights": {"sky": {"dome": {}}}}"#;
+
+#[test]
+fn scene_as_top_level_array_is_rejected() {
+    let path = write_scene("array.json", format!("[{SMALL_SCENE}]").as_bytes());
+    let (code, _, err) = illum(&["render", path.to_str().unwrap(), "-o", "x.exr"]);
+    assert_clean_error(
+        code,
+        &err,
+        &["array.json", "top level", "JSON object", "an array"],
+    );
+}
+
+#[test]
+fn null_field_is_rejected_with_its_field() {
+    let text = SMALL_SCENE.replace(r#""fov_y": 40"#, r#""fov_y": 40, "up": null"#);
+    let path = write_scene("null-up.json", text.as_bytes());
+    let (code, _, err) = illum(&["render", path.to_str().unwrap(), "-o", "x.exr"]);
+    assert_clean_error(code, &err, &["null-up.json", "camera.up", "null"]);
+}
+
+#[test]
+fn utf8_byte_order_mark_is_accepted() {
+    let mut bytes = b"\xef\xbb\xbf".to_vec();
+    bytes.extend(SMALL_SCENE.as_bytes());
+    let path = write_scene("bom.json", &bytes);
+    let out = common::temp_path("bom.exr");
+    let (code, _, err) = illum(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.exists());
+}
+
+/// A scene file that never ends (a link to /dev/zero) is cut off at the cap, named.
+#[test]
+fn endless_scene_file_is_capped() {
+    let path = common::temp_path("endless.json");
+    let _ = std::fs::remove_file(&path);
+    std::os::unix::fs::symlink("/dev/zero", &path).unwrap();
+    let start = std::time::Instant::now();
+    let (code, _, err) = illum(&["render", path.to_str().unwrap(), "-o", "x.exr"]);
+    assert_clean_error(
+        code,
+        &err,
+        &["endless.json", "larger than 64 MiB", "/dev/zero"],
+    );
+    assert!(start.elapsed().as_secs_f64() < 10.0);
+}
+
+#[test]
+fn missing_validation_layer_is_not_called_a_missing_vulkan_library() {
+    let out = Command::new(env!("CARGO_BIN_EXE_illum"))
+        .args(["render", "--validate", "--spp", "1", "--width", "8", "-o"])
+        .arg(common::temp_path("layer.exr"))
+        // The loader then looks for explicit layers only there.
+        .env("VK_LAYER_PATH", "/nonexistent-layer-folder")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("VK_LAYER_KHRONOS_validation") && err.contains("not installed"),
+        "{err}"
+    );
+    assert!(!err.contains("cannot load the Vulkan library"), "{err}");
+}
+
+#[test]
+fn compare_rejects_technique_and_duplicate_techniques() {
+    // --technique belongs to render; compare takes --techniques (a usage error: exit code 2).
+    let (code, _, err) = illum(&["compare", "--technique", "mis"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--technique") && err.contains("--techniques"),
+        "{err}"
+    );
+    let prefix = common::temp_path("dup");
+    let (code, _, err) = illum(&[
+        "compare",
+        "--techniques",
+        "mis,light,mis",
+        "-o",
+        prefix.to_str().unwrap(),
+    ]);
+    assert_clean_error(code, &err, &["--techniques", "mis is named twice"]);
+}
+
+#[test]
+fn stress_names_a_bad_scenes_folder_and_how_to_fix_it() {
+    let report = common::temp_path("stress.md");
+    let r = report.to_str().unwrap();
+    let (code, _, err) = illum(&["stress", "--scenes", "/no/such/scenes", "-o", r]);
+    assert_clean_error(
+        code,
+        &err,
+        &["/no/such/scenes", "no such folder", "scenes/stress"],
+    );
+    let empty = common::temp_path("empty-scenes");
+    std::fs::create_dir_all(&empty).unwrap();
+    let (code, _, err) = illum(&["stress", "--scenes", empty.to_str().unwrap(), "-o", r]);
+    assert_clean_error(code, &err, &["empty-scenes", "holds no", "scenes/stress"]);
+    assert!(!report.exists());
+}
+
+/// Every option of render and compare is documented, with its default.
+#[test]
+fn help_documents_options_and_defaults() {
+    let (code, out, _) = illum(&["render", "--help"]);
+    assert_eq!(code, 0);
+    for needle in [
+        "--height <HEIGHT>  ",
+        "follows the camera's aspect",
+        "[default: 16",
+        "[default: illum.exr]",
+        "[default: mis]",
+        "[default: off]",
+    ] {
+        assert!(
+            out.contains(needle),
+            "render --help lacks {needle:?}:\n{out}"
+        );
+    }
+    let (code, out, _) = illum(&["compare", "--help"]);
+    assert_eq!(code, 0);
+    for opt in [
+        "--width",
+        "--height",
+        "--seed",
+        "--device",
+        "--trace",
+        "--techniques",
+    ] {
+        let line = out
+            .lines()
+            .find(|l| l.trim_start().starts_with(opt))
+            .unwrap_or_else(|| panic!("compare --help lacks {opt}:\n{out}"));
+        assert!(
+            line.len() > opt.len() + 20,
+            "compare {opt} is undocumented: {line:?}"
         );
     }
 }

@@ -4,13 +4,15 @@
 //! classic way (`R`,`G`,`B`, `Albedo.R`, `N.X`, `Z`, ...) so compositing and denoising tools
 //! find them. The PNG is a display-referred preview of the beauty only.
 
+mod file;
 mod openexr;
 pub mod partial;
 mod png;
 
 use std::path::{Path, PathBuf};
 
-pub use openexr::{ExrImage, read_exr, write_exr};
+pub use file::{check_writable, temp_path_for, write_atomically};
+pub use openexr::{ExrImage, read_exr, read_reference, write_exr};
 pub use png::write_png;
 
 /// Linear, scene-referred image planes of one render, row-major, top row first, width*height each.
@@ -155,6 +157,19 @@ pub enum OutputError {
     Png {
         path: PathBuf,
         cause: image::ImageError,
+    },
+    #[error("cannot write {}: {reason}", .path.display())]
+    NotWritable { path: PathBuf, reason: String },
+    #[error(
+        "reference {} is {width}x{height}, the render {expected_width}x{expected_height}",
+        .path.display()
+    )]
+    ReferenceSize {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        expected_width: u32,
+        expected_height: u32,
     },
     #[error("cannot write {}: {cause}", .path.display())]
     Io {

@@ -35,13 +35,32 @@ pub fn write_exr(path: &Path, film: &Film, meta: &ImageMetadata) -> Result<(), O
         line_order: LineOrder::Increasing,
     };
     let size = (film.width as usize, film.height as usize);
-    Image::from_layer(Layer::new(size, attributes, encoding, channels))
-        .write()
-        .to_file(path)
-        .map_err(|cause| OutputError::ExrWrite {
+    let image = Image::from_layer(Layer::new(size, attributes, encoding, channels));
+    super::write_atomically(path, |tmp| {
+        image
+            .write()
+            .to_file(tmp)
+            .map_err(|cause| OutputError::ExrWrite {
+                path: path.to_path_buf(),
+                cause,
+            })
+    })
+}
+
+/// Reads the beauty of a reference image (any EXR with R/G/B or `<layer>`.R/G/B) and checks that
+/// it has the render's resolution.
+pub fn read_reference(path: &Path, width: u32, height: u32) -> Result<Vec<[f32; 3]>, OutputError> {
+    let img = read_exr(path)?;
+    if (img.width, img.height) != (width, height) {
+        return Err(OutputError::ReferenceSize {
             path: path.to_path_buf(),
-            cause,
-        })
+            width: img.width,
+            height: img.height,
+            expected_width: width,
+            expected_height: height,
+        });
+    }
+    img.rgb()
 }
 
 fn text(s: &str) -> Text {

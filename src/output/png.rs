@@ -21,20 +21,22 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
         path: path.to_path_buf(),
         cause,
     };
-    let mut out = BufWriter::new(File::create(path).map_err(io_err)?);
-    PngEncoder::new(&mut out)
-        .write_image(
-            &bytes,
-            film.width,
-            film.height,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|cause| OutputError::Png {
-            path: path.to_path_buf(),
-            cause,
-        })?;
-    // BufWriter's drop would swallow a failing final flush.
-    out.flush().map_err(io_err)
+    super::write_atomically(path, |tmp| {
+        let mut out = BufWriter::new(File::create(tmp).map_err(io_err)?);
+        PngEncoder::new(&mut out)
+            .write_image(
+                &bytes,
+                film.width,
+                film.height,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(|cause| OutputError::Png {
+                path: path.to_path_buf(),
+                cause,
+            })?;
+        // BufWriter's drop would swallow a failing final flush.
+        out.flush().map_err(io_err)
+    })
 }
 
 /// Inverse of the sRGB OETF (`12.92 v` up to v = 0.0031308, else `1.055 v^(1/2.4) - 0.055`),

@@ -27,6 +27,8 @@ use crate::trace::{TraceMode, TraceStructure};
 use crate::vk::{Context, GpuTimer, MemoryLocation};
 use ash::vk;
 use primary::PrimaryKernel;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// How direct lighting is estimated (TECHNIQUES.md §3).
@@ -108,6 +110,10 @@ pub struct RenderSettings {
     /// Firefly clamp: the most luminance one camera sample's direct lighting may have (scaled
     /// down, hue kept, above it). None: off, the default. It biases the image (TECHNIQUES 7.6).
     pub clamp: Option<f32>,
+    /// Set it (from another thread or a signal handler) to stop the render after the current
+    /// round of dispatches: the output then holds the samples done so far (at least one per
+    /// pixel) and says [`RenderStats::interrupted`].
+    pub cancel: Option<Arc<AtomicBool>>,
     /// Test hook: make every n-th sample of each pixel NaN (0: off), to check that non-finite
     /// samples are counted and kept out of the image.
     #[doc(hidden)]
@@ -154,6 +160,7 @@ impl Default for RenderSettings {
             reference: None,
             evaluate_passes: false,
             clamp: None,
+            cancel: None,
             inject_non_finite: 0,
             samples: None,
             crop: None,
@@ -203,6 +210,8 @@ pub struct RenderStats {
     /// Camera samples whose direct lighting the firefly clamp reduced (0 when it is off).
     pub clamped_samples: u64,
     pub trace: &'static str,
+    /// The render stopped early through [`RenderSettings::cancel`]; `spp` says how far it got.
+    pub interrupted: bool,
 }
 
 pub struct RenderOutput {
@@ -253,7 +262,8 @@ impl Renderer {
     }
 
     /// Renders `scene` at its camera's resolution. `progress(spp_done, spp_budget)` is called
-    /// after every submission (with a time budget, spp_budget is the cap).
+    /// once with 0 samples when set-up (kernel compilation, upload, build, warm-up) is over, then
+    /// after every round of dispatches (with a time budget, spp_budget is the cap).
     pub fn render(
         &self,
         scene: &Scene,
@@ -366,6 +376,18 @@ impl Renderer {
         })?;
         let warmup_seconds = warm.elapsed().as_secs_f64();
         let setup_seconds = t0.elapsed().as_secs_f64();
+        // The samples this job renders: its range widened to whole blocks.
+        let first = film::block_of(range.0, settings.spp).0;
+        let last = film::block_of(range.1 - 1, settings.spp).1;
+        let budget = last - first;
+        progress(0, budget);
+        let cancelled = || {
+            settings
+                .cancel
+                .as_ref()
+                .is_some_and(|c| c.load(Ordering::Relaxed))
+        };
+        let mut interrupted = false;
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows,
         // never across a film block (film.rs): blocks leave the device whole.
@@ -377,15 +399,11 @@ impl Renderer {
         } else {
             (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_BLOCK)) as u32
         };
-        // The samples this job renders: its range widened to whole blocks.
-        let first = film::block_of(range.0, settings.spp).0;
-        let last = film::block_of(range.1 - 1, settings.spp).1;
-        let budget = last - first;
         let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
         let mut sums = FilmSums::new(window);
         let mut passes = Vec::new();
         let mut last_resolved = None;
-        while done < budget {
+        while done < budget && !interrupted {
             // Passes grow by half the samples so far (log-spaced points on the error curve);
             // under a time budget a pass is sized to the time left at the measured rate.
             let mut pass = (done / 2).max(1).min(budget - done);
@@ -444,8 +462,13 @@ impl Renderer {
                     film::clear(ctx, &film_buffer)?;
                 }
                 progress(done + k, budget);
+                if cancelled() {
+                    // Every pixel has done + k samples: stop here, keeping them.
+                    interrupted = true;
+                    break;
+                }
             }
-            done += pass;
+            done += k;
             let elapsed = start.elapsed().as_secs_f64();
             wall += elapsed;
             if timer.is_none() {
@@ -502,6 +525,7 @@ impl Renderer {
                 dark_lights: gpu.dark_lights.clone(),
                 emitters: gpu.emitters,
                 clamped_samples: resolved.clamped_samples,
+                interrupted,
             },
             film: resolved.film,
             passes,

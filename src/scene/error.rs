@@ -143,6 +143,42 @@ impl SceneError {
     }
 }
 
+/// Most bytes read from a scene file (JSON text; larger meshes belong in glTF files).
+pub const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
+/// Most bytes read from a file a scene references: a texture, a glTF file or a glTF buffer.
+pub const MAX_ASSET_FILE_BYTES: u64 = 1 << 30;
+
+/// Reads a whole file, but no more than `cap` bytes: a link to an endless stream (/dev/zero, a
+/// pipe that never closes) is an error naming the cap instead of a read that grows without bound.
+pub(crate) fn read_capped(path: &std::path::Path, cap: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    let too_large = || {
+        std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!(
+                "larger than {} MiB, the most illum reads from such a file{}",
+                cap >> 20,
+                if meta.is_file() {
+                    ""
+                } else {
+                    " (it is not a regular file: an endless stream such as /dev/zero?)"
+                }
+            ),
+        )
+    };
+    if meta.is_file() && meta.len() > cap {
+        return Err(too_large());
+    }
+    let mut bytes = Vec::new();
+    file.take(cap + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(too_large());
+    }
+    Ok(bytes)
+}
+
 /// The OS message without Rust's " (os error N)" suffix.
 pub(crate) fn io_message(err: &std::io::Error) -> String {
     let text = err.to_string();
@@ -185,6 +221,27 @@ mod tests {
         assert_eq!(fmt_num(1e300), "1e300");
         assert_eq!(fmt_num(-2.5e-9), "-2.5e-9");
         assert_eq!(fmt_vec(&[1.0, -0.25, 1e20]), "[1, -0.25, 1e20]");
+    }
+
+    #[test]
+    fn reads_are_capped() {
+        let e = read_capped(std::path::Path::new("/dev/zero"), 1 << 20).unwrap_err();
+        let m = io_message(&e);
+        assert!(
+            m.contains("larger than 1 MiB") && m.contains("/dev/zero"),
+            "{m}"
+        );
+        let dir = std::env::temp_dir().join(format!("illum-cap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("two-mib.bin");
+        std::fs::write(&f, vec![0u8; 2 << 20]).unwrap();
+        let m = io_message(&read_capped(&f, 1 << 20).unwrap_err());
+        assert!(
+            m.contains("larger than 1 MiB") && !m.contains("regular"),
+            "{m}"
+        );
+        assert_eq!(read_capped(&f, 2 << 20).unwrap().len(), 2 << 20);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

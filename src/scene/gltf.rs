@@ -2,7 +2,7 @@
 //! Meshes and materials are converted in `gltf_mesh.rs` and `gltf_material.rs`.
 
 use super::check::Ctx;
-use super::error::{SceneError, fmt_num, io_message, quoted};
+use super::error::{MAX_ASSET_FILE_BYTES, SceneError, fmt_num, io_message, quoted, read_capped};
 use super::load::Parts;
 use super::transform::check_invertible;
 use super::types::MaterialId;
@@ -79,7 +79,7 @@ impl Loader<'_> {
 pub(crate) fn load(req: &Request, parts: &mut Parts) -> Result<Vec<GltfCamera>> {
     let path = req.base_dir.join(req.file);
     let gfile = path.display().to_string();
-    let bytes = std::fs::read(&path)
+    let bytes = read_capped(&path, MAX_ASSET_FILE_BYTES)
         .map_err(|e| SceneError::file_read(req.scene_file, req.field, req.file, &e))?;
     let (json, blob) = if bytes.starts_with(b"glTF") {
         // The gltf crate subtracts the header size from this length unchecked.
@@ -312,7 +312,7 @@ pub(crate) fn read_uri(uri: &str, dir: &Path, gfile: &str, field: &str) -> Resul
         ));
     }
     let rel = percent_decode(uri);
-    std::fs::read(dir.join(&rel)).map_err(|e| SceneError::FileRead {
+    read_capped(&dir.join(&rel), MAX_ASSET_FILE_BYTES).map_err(|e| SceneError::FileRead {
         file: gfile.to_owned(),
         field: field.to_owned(),
         path: rel,

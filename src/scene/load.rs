@@ -2,7 +2,10 @@
 //! file's sections in dependency order (textures, materials, shapes, lights, camera).
 
 use super::check::Ctx;
-use super::error::{SceneError, fmt_num, fmt_vec, io_message, quoted};
+use super::error::{
+    MAX_ASSET_FILE_BYTES, MAX_SCENE_FILE_BYTES, SceneError, fmt_num, fmt_vec, io_message, quoted,
+    read_capped,
+};
 use super::format::{
     DomeConventionDef, FilterDef, FresnelDef, LightDef, LobeDef, MaterialDef, MeshDef, ModelDef,
     NumOrArray, SceneFile, ShapeDef, TextureDef, WrapDef,
@@ -30,12 +33,79 @@ pub(crate) struct Parts {
 }
 
 pub(crate) fn parse(text: &str, origin: &str) -> Result<SceneFile> {
+    // Editors on Windows may start UTF-8 files with a byte-order mark; JSON does not allow one.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    check_shape(text, origin)?;
     let mut de = serde_json::Deserializer::from_str(text);
     let file: SceneFile = serde_path_to_error::deserialize(&mut de)
         .map_err(|e| SceneError::from_json(origin, e.path().to_string(), e.inner()))?;
     de.end()
         .map_err(|e| SceneError::from_json(origin, String::new(), &e))?;
     Ok(file)
+}
+
+/// What serde's derived structs let through although the format forbids it: a top-level array
+/// (derived structs also accept their fields in order) and `null` for an optional field.
+fn check_shape(text: &str, origin: &str) -> Result<()> {
+    // Malformed JSON is left to the typed parse, which reports line, column and field.
+    let Ok(value) = serde_json::from_str::<serde_json::Value>(text) else {
+        return Ok(());
+    };
+    if !value.is_object() {
+        return Err(SceneError::unsupported(
+            origin,
+            "top level",
+            format!(
+                "a scene file is one JSON object ({{\"camera\": ..., \"shapes\": ...}}), got {}",
+                json_kind(&value)
+            ),
+        ));
+    }
+    fn find_null(v: &serde_json::Value, path: &mut String) -> bool {
+        let len = path.len();
+        let found = match v {
+            serde_json::Value::Null => return true,
+            serde_json::Value::Object(m) => m.iter().any(|(k, v)| {
+                path.truncate(len);
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(k);
+                find_null(v, path)
+            }),
+            serde_json::Value::Array(a) => a.iter().enumerate().any(|(i, v)| {
+                path.truncate(len);
+                path.push_str(&format!("[{i}]"));
+                find_null(v, path)
+            }),
+            _ => false,
+        };
+        if !found {
+            path.truncate(len);
+        }
+        found
+    }
+    let mut path = String::new();
+    if find_null(&value, &mut path) {
+        return Err(SceneError::invalid(
+            origin,
+            path,
+            "null",
+            "not part of the scene format (leave the field out to get its default)",
+        ));
+    }
+    Ok(())
+}
+
+fn json_kind(v: &serde_json::Value) -> &'static str {
+    match v {
+        serde_json::Value::Null => "null",
+        serde_json::Value::Bool(_) => "a boolean",
+        serde_json::Value::Number(_) => "a number",
+        serde_json::Value::String(_) => "a string",
+        serde_json::Value::Array(_) => "an array",
+        serde_json::Value::Object(_) => "an object",
+    }
 }
 
 pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<Scene> {
@@ -177,7 +247,7 @@ impl Builder<'_> {
             )
         })?;
         let path = self.base_dir.join(&def.file);
-        let bytes = std::fs::read(&path)
+        let bytes = read_capped(&path, MAX_ASSET_FILE_BYTES)
             .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
         let srgb = def.srgb.unwrap_or(kind.srgb_by_default());
         let mut t = texture::decode(name, &bytes, kind, srgb)
@@ -615,9 +685,19 @@ impl Builder<'_> {
 /// Reads a scene file; its directory is the base for relative paths.
 pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+    let io = |e: std::io::Error| SceneError::Io {
         file: origin.clone(),
         message: io_message(&e),
+    };
+    let bytes = read_capped(path, MAX_SCENE_FILE_BYTES).map_err(io)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text (invalid byte at offset {}); scene files are UTF-8 JSON",
+                e.utf8_error().valid_up_to()
+            ),
+        ))
     })?;
     let base = path.parent().unwrap_or(Path::new(""));
     let file = parse(&text, &origin)?;

@@ -15,7 +15,8 @@ mod texture;
 mod transform;
 mod types;
 
-pub use error::SceneError;
+pub(crate) use error::io_message;
+pub use error::{MAX_ASSET_FILE_BYTES, MAX_SCENE_FILE_BYTES, SceneError};
 pub use types::*;
 
 use std::path::Path;

@@ -39,6 +39,32 @@ pub struct Camera {
     pub height: u32,
 }
 
+impl Camera {
+    /// Overrides the resolution. Given one of the two, the other follows the camera's aspect
+    /// ratio (rounded, at least 1); given both, the image takes both (the vertical field of view
+    /// stays, so the horizontal one changes with the aspect).
+    pub fn set_resolution(
+        &mut self,
+        width: Option<u32>,
+        height: Option<u32>,
+    ) -> Result<(), crate::Error> {
+        if width == Some(0) || height == Some(0) {
+            return Err(crate::Error::Invalid(
+                "--width and --height must be at least 1".into(),
+            ));
+        }
+        let (w0, h0) = (f64::from(self.width), f64::from(self.height));
+        let follow = |size: u32, ratio: f64| ((f64::from(size) * ratio).round() as u32).max(1);
+        (self.width, self.height) = match (width, height) {
+            (Some(w), Some(h)) => (w, h),
+            (Some(w), None) => (w, follow(w, h0 / w0)),
+            (None, Some(h)) => (follow(h, w0 / h0), h),
+            (None, None) => return Ok(()),
+        };
+        Ok(())
+    }
+}
+
 /// Index into `Scene::textures`.
 pub type TextureId = u32;
 /// Index into `Scene::materials`.

@@ -67,8 +67,13 @@ pub struct Inner {
     pub timestamp_period: f64,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     messages: Arc<Mutex<Vec<String>>>,
+    kernel_listener: Mutex<Option<KernelListener>>,
     owned: bool,
 }
+
+/// Hears the name of every compute kernel about to be compiled (see
+/// [`Context::set_kernel_listener`]).
+pub type KernelListener = Arc<dyn Fn(&str) + Send + Sync>;
 
 /// The Vulkan context every GPU object of illum lives on. Cheap to clone.
 #[derive(Clone)]
@@ -140,8 +145,8 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance
                 .iter()
                 .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER))
             {
-                return Err(Error::Loader(
-                    "validation requested but VK_LAYER_KHRONOS_validation is not installed (apt-get install vulkan-validationlayers)".into(),
+                return Err(Error::MissingLayer(
+                    VALIDATION_LAYER.to_string_lossy().into_owned(),
                 ));
             }
             layers.push(VALIDATION_LAYER.as_ptr());
@@ -529,6 +534,7 @@ impl Context {
                 timestamp_period: f64::from(limits.timestamp_period),
                 debug,
                 messages,
+                kernel_listener: Mutex::new(None),
                 owned,
             })))
         }
@@ -554,6 +560,23 @@ impl Context {
 
     pub fn validation_enabled(&self) -> bool {
         self.0.debug.is_some()
+    }
+
+    /// Calls `listener` with the kernel's name whenever a compute pipeline is created on this
+    /// context: the driver compiles it then or at its first dispatch (lavapipe: up to half a
+    /// minute the first time a feature combination is seen, fast afterwards from Mesa's shader
+    /// cache). None removes the listener.
+    pub fn set_kernel_listener(&self, listener: Option<KernelListener>) {
+        if let Ok(mut l) = self.0.kernel_listener.lock() {
+            *l = listener;
+        }
+    }
+
+    pub(crate) fn notify_kernel(&self, name: &str) {
+        let listener = self.0.kernel_listener.lock().ok().and_then(|l| l.clone());
+        if let Some(l) = listener {
+            l(name);
+        }
     }
 }
 

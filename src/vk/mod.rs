@@ -7,7 +7,9 @@ mod memory;
 mod pipeline;
 mod timer;
 
-pub use context::{Context, ContextOptions, DeviceInfo, ExternalDevice, list_devices};
+pub use context::{
+    Context, ContextOptions, DeviceInfo, ExternalDevice, KernelListener, list_devices,
+};
 pub use gpu_allocator::MemoryLocation;
 pub use memory::Buffer;
 pub use pipeline::ComputePipeline;

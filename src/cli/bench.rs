@@ -1,0 +1,112 @@
+//! `illum bench trace`: trace throughput, build time and memory of both trace paths.
+
+use crate::trace::TraceMode;
+use crate::trace::bench;
+use crate::vk::{Context, ContextOptions};
+use anyhow::Result;
+use clap::Subcommand;
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// Ray throughput, build time and memory of the trace paths (ray queries, compute BVH) on
+    /// procedurally generated meshes.
+    Trace(BenchTraceArgs),
+}
+
+#[derive(clap::Args)]
+pub struct BenchTraceArgs {
+    /// Triangle counts of the procedural meshes, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "100000,1000000")]
+    pub triangles: Vec<usize>,
+    /// Rays per measurement.
+    #[arg(long, default_value_t = 1 << 18)]
+    pub rays: usize,
+    /// Paths to measure: both, rayquery or bvh.
+    #[arg(long, default_value = "both")]
+    pub trace: String,
+    /// Measurements of each figure; the best one is printed.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    /// Device index or a substring of its name (see `illum devices`).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layers.
+    #[arg(long)]
+    pub validate: bool,
+}
+
+pub fn run(command: &BenchCommand) -> Result<()> {
+    match command {
+        BenchCommand::Trace(a) => trace(a),
+    }
+}
+
+fn trace(a: &BenchTraceArgs) -> Result<()> {
+    let paths = match a.trace.as_str() {
+        "both" => vec![TraceMode::RayQuery, TraceMode::Bvh],
+        other => vec![other.parse::<TraceMode>().map_err(anyhow::Error::msg)?],
+    };
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: a.validate,
+    })?;
+    if paths.contains(&TraceMode::RayQuery) && !ctx.ray_query() {
+        eprintln!(
+            "illum: {} has no VK_KHR_ray_query: measuring the compute BVH only",
+            ctx.info().name
+        );
+    }
+    println!(
+        "device: {} ({}), {} rays per measurement, best of {}",
+        ctx.info().name,
+        ctx.info().driver,
+        a.rays,
+        a.repeat
+    );
+    println!(
+        "{:>9} {:>8} | {:>8} {:>8} {:>8} | {:>13} {:>13} {:>13} | {:>5} {:>5}",
+        "triangles",
+        "path",
+        "build ms",
+        "BLAS MiB",
+        "TLAS KiB",
+        "primary",
+        "bounce any",
+        "bounce close",
+        "hit%",
+        "bnc%"
+    );
+    let rate = |r: bench::Rate| match r.cpu {
+        Some(c) => format!("{:.3} ({:.3})", r.wall, c),
+        None => format!("{:.3}", r.wall),
+    };
+    bench::run(
+        &ctx,
+        &bench::BenchOptions {
+            triangles: a.triangles.clone(),
+            rays: a.rays,
+            paths,
+            repeat: a.repeat,
+        },
+        &mut |r| {
+            println!(
+                "{:>9} {:>8} | {:>8.1} {:>8.2} {:>8.2} | {:>13} {:>13} {:>13} | {:>5.1} {:>5.1}",
+                r.triangles,
+                r.path,
+                r.build.seconds() * 1e3,
+                r.build.blas_bytes as f64 / 1048576.0,
+                r.build.tlas_bytes as f64 / 1024.0,
+                rate(r.primary),
+                rate(r.bounce_any),
+                rate(r.bounce_closest),
+                r.primary_hits * 100.0,
+                r.bounce_hits * 100.0
+            )
+        },
+    )?;
+    println!(
+        "Mrays per second of wall time (and per CPU-second of this process, which other load on \
+         the machine disturbs less); bounce rays: cosine-distributed from the first hits"
+    );
+    super::check_validation(&ctx)
+}

@@ -1,0 +1,211 @@
+//! The `illum` command line, one module per command. `main.rs` only parses the arguments into a
+//! [`Command`] and calls [`run`]; everything a command does lives here, on top of the library's
+//! renderer, outputs and reports, which know nothing of the command line.
+
+pub mod bench;
+pub mod compare;
+pub mod devices;
+pub mod render;
+pub mod schema;
+mod signal;
+pub mod stress;
+
+use crate::output::ImageMetadata;
+use crate::render::{RenderOutput, RenderSettings};
+use crate::scene::Scene;
+use anyhow::Result;
+use clap::Subcommand;
+use std::path::{Path, PathBuf};
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene (the embedded look-development scene when none is given).
+    Render(render::RenderArgs),
+    /// Render a scene with several techniques for the same time and compare their error.
+    Compare(compare::CompareArgs),
+    /// List the Vulkan devices, their drivers, memory and ray-query support.
+    Devices,
+    /// Print the JSON Schema of the scene format.
+    Schema,
+    /// Benchmarks: figures to read, not tests.
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
+    /// Render the stress suite (scenes/stress) and write its Markdown report.
+    Stress(stress::StressArgs),
+}
+
+/// Runs a command, prints its error if any, and returns the process exit status: 0, 1 for an
+/// error, 128 + the signal number (130 for Ctrl-C) when a signal interrupted a render.
+pub fn run(command: Command) -> i32 {
+    let result = match command {
+        Command::Render(a) => render::run(&a),
+        Command::Compare(a) => compare::run(&a),
+        Command::Devices => devices::run(),
+        Command::Schema => schema::run(),
+        Command::Bench(b) => bench::run(&b),
+        Command::Stress(a) => stress::run(&a),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => match e.downcast_ref::<Interrupted>() {
+            Some(i) => {
+                eprintln!("illum: {i}");
+                128 + i.signal
+            }
+            None => {
+                eprintln!("illum: error: {e:#}");
+                1
+            }
+        },
+    }
+}
+
+/// A render stopped by SIGINT or SIGTERM, after writing what it had.
+#[derive(Debug)]
+pub struct Interrupted {
+    pub signal: i32,
+    /// What was kept, e.g. "wrote out.exr with 12 of 64 samples per pixel".
+    pub kept: String,
+}
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "interrupted by {}: {}",
+            signal::name(self.signal),
+            self.kept
+        )
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+/// Scene file (or the default scene) and resolution override, shared by render and compare.
+#[derive(clap::Args, Clone)]
+pub struct SceneArgs {
+    /// Scene file (.json); omit it for the embedded default scene (scenes/default.json).
+    pub scene: Option<PathBuf>,
+    /// Image width in pixels; the height follows the camera's aspect ratio unless --height is
+    /// given too. [default: the scene camera's resolution]
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels; the width follows the camera's aspect ratio unless --width is
+    /// given too. [default: the scene camera's resolution]
+    #[arg(long)]
+    pub height: Option<u32>,
+}
+
+impl SceneArgs {
+    pub fn load(&self) -> Result<Scene> {
+        let mut scene = match &self.scene {
+            Some(p) => crate::scene::load(p)?,
+            None => crate::scene::default_scene(),
+        };
+        scene.camera.set_resolution(self.width, self.height)?;
+        Ok(scene)
+    }
+
+    /// The scene's name for titles: its file, or "default scene".
+    pub fn name(&self) -> String {
+        self.scene
+            .as_ref()
+            .map_or_else(|| "default scene".into(), |p| p.display().to_string())
+    }
+}
+
+/// Sample counts of the direct-lighting integrator (the technique is chosen per command).
+#[derive(clap::Args, Clone)]
+pub struct IntegratorArgs {
+    /// Most light samples per light (each light takes its solid-angle share of these, at least 1);
+    /// 1 to 64.
+    #[arg(long, default_value_t = 4)]
+    pub light_samples: u32,
+    /// BRDF samples per lobe; 1 to 64.
+    #[arg(long, default_value_t = 2)]
+    pub brdf_samples: u32,
+    /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
+    #[arg(long)]
+    pub diffuse_mis: bool,
+}
+
+impl IntegratorArgs {
+    pub fn settings(
+        &self,
+        technique: crate::render::Technique,
+    ) -> crate::render::IntegratorSettings {
+        crate::render::IntegratorSettings {
+            technique,
+            light_samples: self.light_samples,
+            brdf_samples: self.brdf_samples,
+            diffuse_mis: self.diffuse_mis,
+        }
+    }
+}
+
+/// Checks every output path before any work (see [`crate::output::check_writable`]).
+pub fn check_outputs<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Result<()> {
+    for p in paths {
+        crate::output::check_writable(p)?;
+    }
+    Ok(())
+}
+
+/// The EXR header of a render: what `illum render` and `illum compare` write alike.
+pub fn image_metadata(
+    out: &RenderOutput,
+    settings: &RenderSettings,
+    device: &str,
+) -> ImageMetadata {
+    let s = &out.stats;
+    let it = &settings.integrator;
+    let last = out.passes.last().cloned().unwrap_or_default();
+    let mut extra = vec![
+        ("illum.trace".to_string(), s.trace.to_string()),
+        ("illum.technique".into(), it.technique.name().into()),
+        ("illum.lightSamples".into(), it.light_samples.to_string()),
+        ("illum.brdfSamples".into(), it.brdf_samples.to_string()),
+        ("illum.diffuseMIS".into(), it.diffuse_mis.to_string()),
+        (
+            "illum.nonFiniteSamples".into(),
+            s.non_finite_samples.to_string(),
+        ),
+        (
+            "illum.deviceSeconds".into(),
+            format!("{:.6}", s.device_seconds),
+        ),
+    ];
+    if let Some(e) = last.estimated_relmse {
+        extra.push(("illum.estimatedRelMSE".into(), format!("{e:.6e}")));
+    }
+    if let Some(c) = settings.clamp {
+        extra.push(("illum.fireflyClamp".into(), format!("{c} (biased)")));
+        extra.push(("illum.clampedSamples".into(), s.clamped_samples.to_string()));
+    }
+    if let Some(e) = last.error {
+        extra.push(("illum.relMSE".into(), format!("{:.6e}", e.relmse)));
+        extra.push(("illum.RMSE".into(), format!("{:.6e}", e.rmse)));
+        extra.push(("illum.MAE".into(), format!("{:.6e}", e.mae)));
+    }
+    if s.interrupted {
+        extra.push(("illum.interrupted".into(), "true".into()));
+        extra.push(("illum.sppRequested".into(), settings.spp.to_string()));
+    }
+    ImageMetadata {
+        spp: s.spp,
+        render_seconds: s.render_seconds,
+        setup_seconds: s.setup_seconds,
+        device: device.to_string(),
+        seed: settings.seed,
+        extra,
+    }
+}
+
+/// Fails when the Vulkan validation layers reported anything.
+pub fn check_validation(ctx: &crate::vk::Context) -> Result<()> {
+    let msgs = ctx.validation_messages();
+    if !msgs.is_empty() {
+        anyhow::bail!("{} Vulkan validation message(s) (see above)", msgs.len());
+    }
+    Ok(())
+}

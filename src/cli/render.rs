@@ -1,0 +1,349 @@
+//! `illum render`: one scene to EXR (and PNG), with optional error reports.
+
+use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
+use crate::output::{write_exr, write_png};
+use crate::render::{RenderSettings, Renderer, Technique};
+use crate::trace::TraceMode;
+use crate::vk::{Context, ContextOptions};
+use anyhow::{Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output image: .exr (all layers), or .png (then the .exr is written beside it too).
+    #[arg(short, long, default_value = "illum.exr")]
+    pub output: PathBuf,
+    /// Samples per pixel. [default: 16; with --time: no cap]
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Render for this many seconds (progressive passes) instead of a fixed sample count; --spp,
+    /// if given, caps it.
+    #[arg(long)]
+    pub time: Option<f64>,
+    /// Reference image (EXR, same resolution) to measure every pass against.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Write the error-against-time report, one row per pass (CSV).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Plot the error against time (log-log PNG).
+    #[arg(long)]
+    pub report_plot: Option<PathBuf>,
+    /// Seed of the per-sample random streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Device index or a substring of its name (see `illum devices`). [default: the best device:
+    /// discrete, integrated, virtual, then CPU]
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Trace path: auto (ray queries where the device has them), rayquery or bvh.
+    #[arg(long, default_value = "auto")]
+    pub trace: TraceMode,
+    /// Direct lighting by BRDF sampling, light sampling, or both with MIS.
+    #[arg(long, default_value = "mis")]
+    pub technique: Technique,
+    #[command(flatten)]
+    pub integrator: IntegratorArgs,
+    /// Firefly clamp: scale down (keeping the hue) any camera sample whose direct lighting has a
+    /// luminance above this. Biased when on (the summary and the EXR header say so). [default: off]
+    #[arg(long)]
+    pub clamp: Option<f32>,
+    /// Also write an sRGB PNG of the beauty beside the EXR.
+    #[arg(long)]
+    pub png: bool,
+    /// No progress bar, messages or summary (errors and warnings still print).
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Enable the Vulkan validation layers (also on with ILLUM_VALIDATION=1).
+    #[arg(long)]
+    pub validate: bool,
+}
+
+pub fn run(a: &RenderArgs) -> Result<()> {
+    crate::output::check_writable(&a.output)?;
+    let ext = a
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase());
+    let (exr_path, png_path) = match ext.as_deref() {
+        Some("exr") => (
+            a.output.clone(),
+            a.png.then(|| a.output.with_extension("png")),
+        ),
+        Some("png") => (a.output.with_extension("exr"), Some(a.output.clone())),
+        _ => bail!(
+            "-o {}: the output must end in .exr or .png",
+            a.output.display()
+        ),
+    };
+    // Every path is checked before anything slow (scene loading, device, kernels, rendering).
+    check_outputs(
+        [
+            Some(&exr_path),
+            png_path.as_ref(),
+            a.report.as_ref(),
+            a.report_plot.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        .map(PathBuf::as_path),
+    )?;
+    let scene = a.scene.load()?;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let reference = a
+        .reference
+        .as_deref()
+        .map(|p| crate::output::read_reference(p, w, h))
+        .transpose()?;
+    let cancel = signal::install();
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: a.validate,
+    })?;
+    let renderer = Renderer::new(ctx.clone());
+    let spp = match (a.spp, a.time) {
+        (Some(n), _) => n,
+        (None, Some(_)) => 1 << 20,
+        (None, None) => 16,
+    };
+    let settings = RenderSettings {
+        integrator: a.integrator.settings(a.technique),
+        spp,
+        time: a.time,
+        seed: a.seed,
+        trace: a.trace,
+        reference,
+        evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
+        clamp: a.clamp,
+        cancel: Some(cancel),
+        ..Default::default()
+    };
+    let bar = progress_bar(a.quiet, spp, a.time);
+    let setup_done = announce_compiles(&ctx, &bar, a.quiet);
+    let started = Instant::now();
+    let out = renderer.render(&scene, &settings, &mut |done, _| {
+        if !setup_done.swap(true, Ordering::SeqCst) {
+            bar.set_message("");
+        }
+        if let Some(t) = a.time {
+            // Under a time budget the bar shows time, in per-mille of the budget.
+            bar.set_position(((started.elapsed().as_secs_f64() / t) * 1000.0).min(1000.0) as u64);
+        } else {
+            bar.set_position(u64::from(done))
+        }
+    });
+    setup_done.store(true, Ordering::SeqCst);
+    ctx.set_kernel_listener(None);
+    bar.finish_and_clear();
+    let out = out?;
+    let s = &out.stats;
+    if !s.dark_lights.is_empty() {
+        eprintln!(
+            "illum: note: left out lights that emit nothing (zero radiance or size): {}",
+            s.dark_lights.join(", ")
+        );
+    }
+    if s.emitters == 0 {
+        eprintln!(
+            "illum: warning: the scene emits no light (no light with radiance and size, no emissive \
+             geometry): the image is black apart from the dome or emission seen directly"
+        );
+    }
+
+    // The image first: a report or plot that fails to write must not lose it.
+    let meta = image_metadata(&out, &settings, &ctx.info().name);
+    write_exr(&exr_path, &out.film, &meta)?;
+    if let Some(p) = &png_path {
+        write_png(p, &out.film)?;
+    }
+    let mut failures = Vec::new();
+    if let Some(p) = &a.report
+        && let Err(e) = crate::report::write_csv(p, &out.passes)
+    {
+        failures.push(e.to_string());
+    }
+    if let Some(p) = &a.report_plot
+        && let Err(e) = plot(p, &a.scene.name(), &out, settings.reference.is_some())
+    {
+        failures.push(e.to_string());
+    }
+    let written = match &png_path {
+        Some(p) => format!("{} and {}", exr_path.display(), p.display()),
+        None => exr_path.display().to_string(),
+    };
+    if !a.quiet {
+        summary(&out, &scene, &ctx, &written, a.clamp);
+    }
+    if !failures.is_empty() {
+        bail!("wrote {written}, but: {}", failures.join("; "));
+    }
+    super::check_validation(&ctx)?;
+    if s.interrupted {
+        return Err(Interrupted {
+            signal: signal::received().unwrap_or(libc::SIGINT),
+            kept: format!("wrote {written} with {} of {spp} samples per pixel", s.spp),
+        }
+        .into());
+    }
+    Ok(())
+}
+
+/// A bar drawn from the start (a spinner while the kernels compile and the scene uploads), on
+/// stderr; hidden with --quiet or when stderr is not a terminal.
+pub(super) fn progress_bar(quiet: bool, spp: u32, time: Option<f64>) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let (len, unit) = match time {
+        Some(_) => (1000, "‰ of the time"),
+        None => (u64::from(spp), "spp"),
+    };
+    let b = ProgressBar::new(len);
+    b.set_style(
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit} (eta {{eta}}) {{msg}}"
+        ))
+        .expect("valid template"),
+    );
+    b.set_message("setting up");
+    b.enable_steady_tick(Duration::from_millis(200));
+    b
+}
+
+/// Says "compiling kernels…" on stderr when the driver is still compiling half a second after the
+/// first kernel was created (the first render of a feature combination on lavapipe: 14–31 s;
+/// later ones hit Mesa's shader cache and say nothing). Returns the flag that the first progress
+/// call (set-up over) sets.
+pub(super) fn announce_compiles(ctx: &Context, bar: &ProgressBar, quiet: bool) -> Arc<AtomicBool> {
+    let done = Arc::new(AtomicBool::new(false));
+    if quiet {
+        return done;
+    }
+    let started = Arc::new(AtomicBool::new(false));
+    let (d, b) = (done.clone(), bar.clone());
+    ctx.set_kernel_listener(Some(Arc::new(move |_name: &str| {
+        if started.swap(true, Ordering::SeqCst) {
+            return;
+        }
+        let (d, b) = (d.clone(), b.clone());
+        std::thread::spawn(move || {
+            let t = Instant::now();
+            while t.elapsed() < Duration::from_millis(500) {
+                if d.load(Ordering::SeqCst) {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            if !d.load(Ordering::SeqCst) {
+                b.suspend(|| {
+                    eprintln!(
+                        "illum: compiling kernels for this scene's features… (the first time a \
+                         feature combination is seen this takes up to half a minute on a CPU \
+                         driver; later renders reuse the driver's cache)"
+                    )
+                });
+                b.set_message("compiling kernels");
+            }
+        });
+    })));
+    done
+}
+
+fn plot(
+    path: &std::path::Path,
+    scene: &str,
+    out: &crate::render::RenderOutput,
+    measured: bool,
+) -> crate::Result<()> {
+    let (label, points): (&str, Vec<(f64, f64)>) = if measured {
+        (
+            "relMSE",
+            out.passes
+                .iter()
+                .filter_map(|p| Some((p.wall_seconds, p.error?.relmse)))
+                .collect(),
+        )
+    } else {
+        (
+            "estimated relMSE (half-buffers; blind to bias)",
+            out.passes
+                .iter()
+                .filter_map(|p| Some((p.wall_seconds, p.estimated_relmse?)))
+                .collect(),
+        )
+    };
+    crate::report::plot_error(
+        path,
+        &format!("{scene}: error against time"),
+        label,
+        &[crate::report::Series {
+            name: out.stats.trace.to_string(),
+            points,
+        }],
+    )
+}
+
+fn summary(
+    out: &crate::render::RenderOutput,
+    scene: &crate::scene::Scene,
+    ctx: &Context,
+    written: &str,
+    clamp: Option<f32>,
+) {
+    let s = &out.stats;
+    let b = &s.build;
+    let last = out.passes.last().cloned().unwrap_or_default();
+    let samples = f64::from(scene.camera.width) * f64::from(scene.camera.height) * f64::from(s.spp);
+    eprintln!(
+        "illum: {}x{} at {} spp in {:.2} s on {} via {}: upload {:.3} s, structure build {:.3} s \
+         ({} triangles; BLAS {:.1} MiB after compaction from {:.1}, TLAS {:.2} MiB), render {:.2} s \
+         ({:.2} M camera samples/s, {:.2} M rays/s, {:.2} rays per sample); {} non-finite samples; wrote {}",
+        scene.camera.width,
+        scene.camera.height,
+        s.spp,
+        s.total_seconds,
+        ctx.info().name,
+        s.trace,
+        s.upload_seconds,
+        b.blas_seconds + b.compaction_seconds + b.tlas_seconds,
+        b.triangles,
+        b.blas_bytes as f64 / 1048576.0,
+        b.blas_bytes_uncompacted as f64 / 1048576.0,
+        b.tlas_bytes as f64 / 1048576.0,
+        s.render_seconds,
+        samples / s.render_seconds / 1e6,
+        s.rays as f64 / s.render_seconds / 1e6,
+        s.rays as f64 / samples,
+        s.non_finite_samples,
+        written,
+    );
+    let mut line = format!(
+        "illum: {} spp, {:.3} s rendering ({:.3} s on the device)",
+        last.spp, last.wall_seconds, last.device_seconds
+    );
+    if s.interrupted {
+        line += " (INTERRUPTED)";
+    }
+    if let Some(e) = last.error {
+        line += &format!(
+            ": relMSE {:.4e}, RMSE {:.4e}, MAE {:.4e} against the reference",
+            e.relmse, e.rmse, e.mae
+        );
+    }
+    if let Some(e) = last.estimated_relmse {
+        line += &format!("; estimated relMSE {e:.4e} (half-buffers, blind to bias)");
+    }
+    if let Some(c) = clamp {
+        line += &format!(
+            "; BIASED: firefly clamp at luminance {c} reduced {} camera samples",
+            s.clamped_samples
+        );
+    }
+    eprintln!("{line}");
+}
