@@ -221,6 +221,21 @@ impl Renderer {
         settings: &RenderSettings,
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<RenderOutput> {
+        let mut out = self.render_seeds(scene, settings, &[settings.seed], progress)?;
+        Ok(out.pop().expect("one render per seed"))
+    }
+
+    /// Renders `scene` once per seed in `seeds` (`settings.seed` is ignored), each exactly as
+    /// [`Renderer::render`] would with that seed, but with one upload, trace structure and
+    /// pipeline for all: independent renders for the price of their samples (the pipeline
+    /// compilation dominates small renders on CPU drivers). Used by statistical tests.
+    pub fn render_seeds(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        seeds: &[u64],
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<Vec<RenderOutput>> {
         let ctx = &self.ctx;
         let t0 = Instant::now();
         if settings.spp == 0 {
@@ -330,114 +345,129 @@ impl Renderer {
             (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_FLUSH_SAMPLES))
                 as u32
         };
-        let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
-        let mut host = film::HostFilm::new(pixels as usize);
-        let mut since_flush = 0u32;
-        let mut passes = Vec::new();
-        let mut last = None;
-        while done < settings.spp {
-            // Passes grow by half the samples so far (log-spaced points on the error curve);
-            // under a time budget a pass is sized to the time left at the measured rate.
-            let mut pass = (done / 2).max(1).min(settings.spp - done);
-            if let Some(t) = settings.time {
-                if wall >= t {
-                    break;
-                }
-                if done > 0 {
-                    let rate = f64::from(done) / wall.max(1e-9);
-                    pass = pass.min(((t - wall) * rate).max(1.0) as u32);
-                }
+        let mut outputs = Vec::with_capacity(seeds.len());
+        for (index, &seed) in seeds.iter().enumerate() {
+            let t0 = if index == 0 { t0 } else { Instant::now() };
+            if index > 0 {
+                ctx.one_shot(|cmd| {
+                    // SAFETY: the film buffer is alive until the wait.
+                    unsafe {
+                        ctx.device
+                            .cmd_fill_buffer(cmd, film.buffer, 0, vk::WHOLE_SIZE, 0)
+                    }
+                })?;
             }
-            let start = Instant::now();
-            let mut k = 0;
-            while k < pass {
-                let n = per_dispatch.min(pass - k);
-                for y0 in (0..h).step_by(TILE as usize) {
-                    for x0 in (0..w).step_by(TILE as usize) {
-                        let pc = PassConstants {
-                            first_sample: done + k,
-                            sample_count: n,
-                            seed_lo: settings.seed as u32,
-                            seed_hi: (settings.seed >> 32) as u32,
-                            tile: [x0, y0, TILE.min(w - x0), TILE.min(h - y0)],
-                        };
-                        ctx.one_shot(|cmd| {
-                            if let Some(t) = &timer {
-                                t.start(cmd);
-                            }
-                            kernel.record(cmd, &pc);
-                            if let Some(t) = &timer {
-                                t.stop(cmd);
-                            }
-                        })?;
-                        if let Some(t) = &timer {
-                            device += t.seconds()?;
-                        }
+            let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
+            let mut host = film::HostFilm::new(pixels as usize);
+            let mut since_flush = 0u32;
+            let mut passes = Vec::new();
+            let mut last = None;
+            while done < settings.spp {
+                // Passes grow by half the samples so far (log-spaced points on the error curve);
+                // under a time budget a pass is sized to the time left at the measured rate.
+                let mut pass = (done / 2).max(1).min(settings.spp - done);
+                if let Some(t) = settings.time {
+                    if wall >= t {
+                        break;
+                    }
+                    if done > 0 {
+                        let rate = f64::from(done) / wall.max(1e-9);
+                        pass = pass.min(((t - wall) * rate).max(1.0) as u32);
                     }
                 }
-                k += n;
-                since_flush += n;
-                if since_flush >= FILM_FLUSH_SAMPLES {
+                let start = Instant::now();
+                let mut k = 0;
+                while k < pass {
+                    let n = per_dispatch.min(pass - k);
+                    for y0 in (0..h).step_by(TILE as usize) {
+                        for x0 in (0..w).step_by(TILE as usize) {
+                            let pc = PassConstants {
+                                first_sample: done + k,
+                                sample_count: n,
+                                seed_lo: seed as u32,
+                                seed_hi: (seed >> 32) as u32,
+                                tile: [x0, y0, TILE.min(w - x0), TILE.min(h - y0)],
+                            };
+                            ctx.one_shot(|cmd| {
+                                if let Some(t) = &timer {
+                                    t.start(cmd);
+                                }
+                                kernel.record(cmd, &pc);
+                                if let Some(t) = &timer {
+                                    t.stop(cmd);
+                                }
+                            })?;
+                            if let Some(t) = &timer {
+                                device += t.seconds()?;
+                            }
+                        }
+                    }
+                    k += n;
+                    since_flush += n;
+                    if since_flush >= FILM_FLUSH_SAMPLES {
+                        host.flush(ctx, &film)?;
+                        since_flush = 0;
+                    }
+                    progress(done + k, settings.spp);
+                }
+                done += pass;
+                let elapsed = start.elapsed().as_secs_f64();
+                wall += elapsed;
+                if timer.is_none() {
+                    device += elapsed;
+                }
+                let mut report = PassReport {
+                    pass: passes.len() as u32,
+                    spp: done,
+                    device_seconds: device,
+                    wall_seconds: wall,
+                    ..Default::default()
+                };
+                if evaluate {
                     host.flush(ctx, &film)?;
                     since_flush = 0;
+                    let r = film::resolve(&host, w, h, done);
+                    evaluate_pass(&mut report, &r, settings.reference.as_deref());
+                    passes.push(report);
+                    last = Some(r);
+                } else {
+                    passes.clear();
+                    passes.push(report);
                 }
-                progress(done + k, settings.spp);
             }
-            done += pass;
-            let elapsed = start.elapsed().as_secs_f64();
-            wall += elapsed;
-            if timer.is_none() {
-                device += elapsed;
-            }
-            let mut report = PassReport {
-                pass: passes.len() as u32,
-                spp: done,
-                device_seconds: device,
-                wall_seconds: wall,
-                ..Default::default()
+            let resolved = match last {
+                Some(r) if r.spp == done => r,
+                _ => {
+                    host.flush(ctx, &film)?;
+                    film::resolve(&host, w, h, done)
+                }
             };
-            if evaluate {
-                host.flush(ctx, &film)?;
-                since_flush = 0;
-                let r = film::resolve(&host, w, h, done);
-                evaluate_pass(&mut report, &r, settings.reference.as_deref());
-                passes.push(report);
-                last = Some(r);
-            } else {
-                passes.clear();
-                passes.push(report);
+            if !evaluate && let Some(p) = passes.last_mut() {
+                evaluate_pass(p, &resolved, settings.reference.as_deref());
             }
+            outputs.push(RenderOutput {
+                stats: RenderStats {
+                    upload_seconds,
+                    warmup_seconds,
+                    // Later seeds reuse the set-up: only the film is cleared.
+                    setup_seconds: if index == 0 { setup_seconds } else { 0.0 },
+                    build: build.clone(),
+                    render_seconds: wall,
+                    device_seconds: device,
+                    total_seconds: t0.elapsed().as_secs_f64(),
+                    spp: done,
+                    non_finite_samples: resolved.non_finite_samples,
+                    rays: resolved.rays,
+                    trace: trace.name(),
+                    dark_lights: gpu.dark_lights.clone(),
+                    emitters: gpu.emitters,
+                    clamped_samples: resolved.clamped_samples,
+                },
+                film: resolved.film,
+                passes,
+            });
         }
-        let resolved = match last {
-            Some(r) if r.spp == done => r,
-            _ => {
-                host.flush(ctx, &film)?;
-                film::resolve(&host, w, h, done)
-            }
-        };
-        if !evaluate && let Some(p) = passes.last_mut() {
-            evaluate_pass(p, &resolved, settings.reference.as_deref());
-        }
-        Ok(RenderOutput {
-            stats: RenderStats {
-                upload_seconds,
-                warmup_seconds,
-                setup_seconds,
-                build,
-                render_seconds: wall,
-                device_seconds: device,
-                total_seconds: t0.elapsed().as_secs_f64(),
-                spp: done,
-                non_finite_samples: resolved.non_finite_samples,
-                rays: resolved.rays,
-                trace: trace.name(),
-                dark_lights: gpu.dark_lights.clone(),
-                emitters: gpu.emitters,
-                clamped_samples: resolved.clamped_samples,
-            },
-            film: resolved.film,
-            passes,
-        })
+        Ok(outputs)
     }
 }
 
