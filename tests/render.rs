@@ -181,14 +181,15 @@ fn a_constant_dome_is_seen_exactly_and_lights_lambert_as_albedo_times_radiance()
         }
     }
     // An unoccluded Lambert plane under a uniform dome reflects exactly albedo * L.
-    let plane = render(
+    let plane = render_batches(
         r#"{"camera": {"position": [0, 1, 0], "look_at": [0, 0, -1], "fov_y": 40, "resolution": [8, 8]},
             "materials": {"m": {"diffuse": [0.5, 0.25, 1]}},
             "shapes": {"floor": {"disk": {"center": [0, 0, -1], "normal": [0, 1, 0], "radius": 1000}, "material": "m"}},
             "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 2}}}"#,
-        16,
+        64,
+        0,
     );
-    assert_matches_expectation(&plane.film, 16, |_| [1.0, 0.5, 2.0], 0.01);
+    assert_matches_expectation(&plane, |_| [1.0, 0.5, 2.0], 0.01);
 }
 
 #[test]
@@ -325,5 +326,47 @@ fn loop_limiter_probe_agrees_with_a_direct_measurement() {
             assert!(!limited, "{driver}");
         }
     }
+    assert_no_validation_messages(&ctx);
+}
+
+/// `Renderer::render_seeds` (one pipeline for several independent renders, as the statistical
+/// tests use it) gives, seed for seed, exactly the images of separate renders.
+#[test]
+fn render_seeds_equals_separate_renders() {
+    let ctx = context();
+    let renderer = illum::render::Renderer::new(ctx.clone());
+    let s = scene(
+        r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0.5, 0], "fov_y": 40, "resolution": [8, 6]},
+            "materials": {"m": {"diffuse": [0.7, 0.6, 0.5], "specular": [{"model": "ggx", "roughness": 0.3}]}},
+            "shapes": {"s": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "m"},
+                       "f": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "m"}},
+            "lights": {"l": {"sphere": {"center": [1, 2, 1], "radius": 0.3}, "intensity": 10}}}"#,
+    );
+    let settings = illum::render::RenderSettings {
+        spp: 5,
+        trace: trace_mode(),
+        ..Default::default()
+    };
+    let seeds = [5u64, 9, 5];
+    let many = renderer
+        .render_seeds(&s, &settings, &seeds, &mut |_, _| {})
+        .unwrap();
+    assert_eq!(many.len(), 3);
+    for (out, &seed) in many.iter().zip(&seeds) {
+        let one = renderer
+            .render(
+                &s,
+                &illum::render::RenderSettings {
+                    seed,
+                    ..settings.clone()
+                },
+                &mut |_, _| {},
+            )
+            .unwrap();
+        assert_eq!(out.stats.spp, 5);
+        assert_eq!(out.film.beauty, one.film.beauty, "seed {seed}");
+        assert_eq!(out.film.variance, one.film.variance, "seed {seed}");
+    }
+    assert_ne!(many[0].film.beauty, many[1].film.beauty);
     assert_no_validation_messages(&ctx);
 }
