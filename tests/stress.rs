@@ -457,7 +457,7 @@ fn glossy_reference_quadrature_matches_closed_forms() {
     };
     // Rect 1 × 0.5 at height 1, tilted, radiance 3.
     let s = lights(
-        r#"{"rect": {"center": [1, 1, 0.5], "normal": [-0.3, -1, 0.2], "size": [1, 0.5]}, "intensity": 3}"#,
+        r#"{"rect": {"center": [1, 1, 0.5], "normal": [-0.3, -1, 0.2], "size": [1, 0.5]}, "intensity": 3, "shadows": false}"#,
     );
     let illum::scene::LightKind::Rect { center, u, v: ev } = s.lights[0].kind else {
         unreachable!()
@@ -471,7 +471,9 @@ fn glossy_reference_quadrature_matches_closed_forms() {
         1e-10,
     );
     // Sphere light of radius 0.5 whose centre is 0.2 above the horizon: cut by it.
-    let s = lights(r#"{"sphere": {"center": [3.3, 0.2, -0.2], "radius": 0.5}, "intensity": 2}"#);
+    let s = lights(
+        r#"{"sphere": {"center": [3.3, 0.2, -0.2], "radius": 0.5}, "intensity": 2, "shadows": false}"#,
+    );
     let (d, r) = (glam::DVec3::new(3.0, 0.2, 0.0), 0.5f64);
     let want = 2.0 * sphere_irradiance(d.normalize().y, (r / d.length()).powi(2)) / pi;
     check(

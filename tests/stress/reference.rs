@@ -180,7 +180,8 @@ fn cone(
 }
 
 /// The reflected radiance at `p` (floor point, material `brdf`) toward `v` from every light of
-/// `scene`. Lights are taken as non-occluding (illum's convention; the floor is one plane).
+/// `scene`, with nothing occluded: the floor is one plane, and the area lights must be
+/// `"shadows": false` (as the stress scenes make them), so that none hides another or the dome.
 pub fn radiance(scene: &Scene, brdf: &Brdf, p: DVec3, v: DVec3, q: Quadrature) -> f64 {
     let gl = gauss_legendre(NODES);
     let n = brdf.n;
@@ -195,6 +196,11 @@ pub fn radiance(scene: &Scene, brdf: &Brdf, p: DVec3, v: DVec3, q: Quadrature) -
             light.name
         );
         let le = c.x;
+        assert!(
+            !light.shadows || matches!(light.kind, LightKind::Dome { .. } | LightKind::Sun { .. }),
+            "{}: an opaque area light would hide the lights behind it; the reference has no occlusion",
+            light.name
+        );
         total += match &light.kind {
             LightKind::Rect { center, u, v: ev } => {
                 let ln = u.cross(*ev).normalize();
