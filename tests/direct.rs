@@ -1,8 +1,10 @@
 //! The direct-lighting integrator against closed forms (TECHNIQUES.md §5) and against itself:
 //! a Lambert plane lit by a disk, a sphere and a rect light (exact unshadowed irradiance); an
 //! emissive quad and a rect light of the same radiance give the same image; BRDF sampling, light
-//! sampling and MIS converge to the same image. Every comparison is a z-test with the variance
-//! AOV at family-wise significance 0.01 (Šidák over pixels and channels).
+//! sampling and MIS converge to the same image. Every image is BATCHES independent renders, and
+//! every comparison a t-test per pixel and channel whose variance comes from their spread (not
+//! the renderer's Variance AOV), at family-wise significance 0.01 (Šidák over pixels and
+//! channels), plus a test of the image mean.
 
 mod common;
 use common::*;
@@ -51,12 +53,8 @@ fn floor_points() -> Vec<Vec<DVec3>> {
     out
 }
 
-fn render_technique(
-    json: &str,
-    spp: u32,
-    technique: Technique,
-    seed: u64,
-) -> illum::render::RenderOutput {
+/// `spp` samples per pixel of `json` by `technique`, in BATCHES independent renders.
+fn render_technique(json: &str, spp: u32, technique: Technique, seed: u64) -> Batches {
     let ctx = context();
     let settings = RenderSettings {
         spp,
@@ -68,9 +66,12 @@ fn render_technique(
         },
         ..Default::default()
     };
-    let out = Renderer::new(ctx.clone())
-        .render(&scene(json), &settings, &mut |_, _| {})
-        .unwrap();
+    let out = Batches::render(
+        &Renderer::new(ctx.clone()),
+        &scene(json),
+        &settings,
+        BATCHES,
+    );
     assert_no_validation_messages(&ctx);
     out
 }
@@ -78,10 +79,9 @@ fn render_technique(
 /// Outgoing radiance of the Lambert floor for irradiance E(x): albedo E / pi.
 fn check_against(json: &str, irradiance: impl Fn(DVec3) -> f64) {
     let pts = floor_points();
-    let out = render_technique(json, 32, Technique::Mis, 1);
+    let out = render_technique(json, 128, Technique::Mis, 1);
     assert_matches_expectation(
-        &out.film,
-        32,
+        &out,
         |i| {
             let e = pts[i].iter().map(|&p| irradiance(p)).sum::<f64>() / pts[i].len() as f64;
             [ALBEDO * e / PI; 3]
@@ -147,25 +147,54 @@ fn rect_light_matches_the_polygon_formula() {
     );
 }
 
-/// Pixelwise t-test that two independent renders (at least `spp` samples each) estimate the same
-/// image.
-fn assert_same_image(a: &illum::output::Film, b: &illum::output::Film, spp: u32, what: &str) {
-    let (va, vb) = (a.variance.as_ref().unwrap(), b.variance.as_ref().unwrap());
-    let tests = (a.beauty.len() * 3) as f64;
-    let z = t_for(1.0 - (1.0 - 0.01f64).powf(1.0 / tests), f64::from(spp - 1));
-    for i in 0..a.beauty.len() {
+/// Welch's t-test per pixel and channel that two independent sets of renders estimate the same
+/// image, with the variances of both means from their renders' spread (Šidák over pixels and
+/// channels at 0.01); and the same for the image mean per channel.
+fn assert_same_image(a: &Batches, b: &Batches, what: &str) {
+    let tests = (a.mean.len() * 3) as f64;
+    let per = 1.0 - (1.0 - 0.01f64).powf(1.0 / tests);
+    let (da, db) = (f64::from(a.k - 1), f64::from(b.k - 1));
+    let mut worst = (0.0f64, 0.0f64);
+    let (mut sum_d, mut parts) = ([0.0f64; 3], [vec![], vec![], vec![]]);
+    for i in 0..a.mean.len() {
         for c in 0..3 {
-            let d = f64::from(a.beauty[i][c]) - f64::from(b.beauty[i][c]);
-            let tol = z * (f64::from(va[i][c]) + f64::from(vb[i][c])).sqrt()
-                + 1e-5 * f64::from(a.beauty[i][c]).abs()
-                + 1e-6;
+            let d = a.mean[i][c] - b.mean[i][c];
+            let (va, vb) = (a.var[i][c], b.var[i][c]);
+            let t = t_for(per, welch_dof(&[(va, da), (vb, db)]));
+            let floor = 1e-5 * a.mean[i][c].abs() + 1e-6;
+            let se = (va + vb).sqrt();
+            let tol = t * se + floor;
+            let ti = (d.abs() - floor).max(0.0) / se.max(1e-300);
+            if ti > worst.0 {
+                worst = (ti, t);
+            }
             assert!(
                 d.abs() <= tol,
-                "{what}: pixel {i} channel {c}: {} vs {} (± {tol})",
-                a.beauty[i][c],
-                b.beauty[i][c]
+                "{what}: pixel {i} channel {c}: {} vs {} (± {tol}, t = {:.2}, limit {t:.2})",
+                a.mean[i][c],
+                b.mean[i][c],
+                d / se
             );
+            sum_d[c] += d;
+            parts[c].push((va, da));
+            parts[c].push((vb, db));
         }
+    }
+    eprintln!(
+        "{what}: largest |t| over pixels {:.2} (its limit {:.2})",
+        worst.0, worst.1
+    );
+    let n = a.mean.len() as f64;
+    for c in 0..3 {
+        let var: f64 = parts[c].iter().map(|p| p.0).sum();
+        let t = t_for(0.01 / 3.0, welch_dof(&parts[c]));
+        let tm = sum_d[c] / var.sqrt().max(1e-300);
+        eprintln!("{what}: image mean channel {c}: t = {tm:.2} (limit {t:.2})");
+        assert!(
+            (sum_d[c] / n).abs() <= t * var.sqrt() / n + 1e-6,
+            "{what}: channel {c}: image means differ by {} (t = {tm:.2})",
+            sum_d[c] / n
+        );
     }
 }
 
@@ -189,17 +218,15 @@ const GLOSSY: &str = r#"{
 /// estimated variance is unreliable and no per-pixel test is valid.
 #[test]
 fn brdf_light_and_mis_converge_to_the_same_image() {
-    let mis = render_technique(GLOSSY, 64, Technique::Mis, 11);
-    let light = render_technique(GLOSSY, 64, Technique::Light, 12);
-    let brdf = render_technique(GLOSSY, 384, Technique::Brdf, 13);
+    let mis = render_technique(GLOSSY, 128, Technique::Mis, 11);
+    let light = render_technique(GLOSSY, 128, Technique::Light, 12);
+    let brdf = render_technique(GLOSSY, 768, Technique::Brdf, 13);
     assert_eq!(
-        mis.stats.non_finite_samples
-            + light.stats.non_finite_samples
-            + brdf.stats.non_finite_samples,
+        mis.non_finite_samples + light.non_finite_samples + brdf.non_finite_samples,
         0
     );
-    assert_same_image(&mis.film, &light.film, 64, "mis vs light");
-    assert_same_image(&mis.film, &brdf.film, 64, "mis vs brdf");
+    assert_same_image(&mis, &light, "mis vs light");
+    assert_same_image(&mis, &brdf, "mis vs brdf");
 }
 
 #[test]
@@ -223,9 +250,9 @@ fn an_emissive_quad_and_a_rect_light_of_the_same_radiance_give_the_same_image() 
             r#""glow": {"diffuse": [0, 0, 0], "emission": [8, 7.2, 6.4]}, "brushed": {"#,
         );
     assert_ne!(light, quad);
-    let a = render_technique(&light, 48, Technique::Mis, 21);
-    let b = render_technique(&quad, 48, Technique::Mis, 22);
-    assert_same_image(&a.film, &b.film, 48, "rect light vs emissive quad");
+    let a = render_technique(&light, 96, Technique::Mis, 21);
+    let b = render_technique(&quad, 96, Technique::Mis, 22);
+    assert_same_image(&a, &b, "rect light vs emissive quad");
 }
 
 /// Emission textures work the same on both kinds of light: a textured emissive mesh quad (two
@@ -268,23 +295,18 @@ fn a_textured_emissive_mesh_and_a_textured_rect_light_give_the_same_image() {
                    "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]], "indices": [0, 1, 2, 0, 2, 3]}, "material": "glow"}"#,
         )
     };
-    let a = render_technique(&rect, 64, Technique::Mis, 31);
+    let a = render_technique(&rect, 128, Technique::Mis, 31);
     let b = render_technique(
         &quad(r#", "emission_texture": "pattern""#),
-        64,
+        128,
         Technique::Mis,
         32,
     );
-    assert_same_image(
-        &a.film,
-        &b.film,
-        64,
-        "textured rect light vs textured emissive mesh",
-    );
-    let plain = render_technique(&quad(""), 64, Technique::Mis, 33);
-    let mean = |f: &illum::output::Film| f.beauty.iter().map(|p| p[2] as f64).sum::<f64>();
+    assert_same_image(&a, &b, "textured rect light vs textured emissive mesh");
+    let plain = render_technique(&quad(""), 128, Technique::Mis, 33);
+    let mean = |f: &Batches| f.mean.iter().map(|p| p[2]).sum::<f64>();
     assert!(
-        (mean(&plain.film) - mean(&b.film)).abs() > 0.2 * mean(&b.film),
+        (mean(&plain) - mean(&b)).abs() > 0.2 * mean(&b),
         "the emission texture changed nothing"
     );
 }
@@ -309,7 +331,7 @@ fn anisotropy_follows_mesh_tangents() {
     let along = |t: &str| format!(r#", "tangents": [{t}, {t}, {t}, {t}]"#);
     let x = along("[1, 0, 0, 1]");
     let z = along("[0, 0, 1, -1]");
-    let spp = 32;
+    let spp = 64;
     // (Along Z, since the default frame of an upward normal happens to be along X.)
     let mesh_z = render_technique(&scene(&z, "", 0.0), spp, Technique::Mis, 41);
     let material_z = render_technique(
@@ -318,12 +340,7 @@ fn anisotropy_follows_mesh_tangents() {
         Technique::Mis,
         42,
     );
-    assert_same_image(
-        &mesh_z.film,
-        &material_z.film,
-        spp,
-        "mesh tangents vs material tangent",
-    );
+    assert_same_image(&mesh_z, &material_z, "mesh tangents vs material tangent");
     // The mesh's tangents win over the material's direction.
     let mesh_x = render_technique(
         &scene(&x, r#""tangent": [0, 0, 1],"#, 0.0),
@@ -337,28 +354,17 @@ fn anisotropy_follows_mesh_tangents() {
         Technique::Mis,
         44,
     );
-    assert_same_image(
-        &mesh_x.film,
-        &material_x.film,
-        spp,
-        "mesh tangents before the material's",
-    );
+    assert_same_image(&mesh_x, &material_x, "mesh tangents before the material's");
     // Tangents along X on an instance turned 90° about Y point along Z in the world.
     let turned = render_technique(&scene(&x, "", 90.0), spp, Technique::Mis, 45);
-    assert_same_image(
-        &turned.film,
-        &mesh_z.film,
-        spp,
-        "tangents turn with the instance",
-    );
+    assert_same_image(&turned, &mesh_z, "tangents turn with the instance");
     let diff: f64 = mesh_x
-        .film
-        .beauty
+        .mean
         .iter()
-        .zip(&mesh_z.film.beauty)
-        .map(|(a, b)| (f64::from(a[1]) - f64::from(b[1])).abs())
+        .zip(&mesh_z.mean)
+        .map(|(a, b)| (a[1] - b[1]).abs())
         .sum();
-    let total: f64 = mesh_x.film.beauty.iter().map(|p| f64::from(p[1])).sum();
+    let total: f64 = mesh_x.mean.iter().map(|p| p[1]).sum();
     assert!(
         diff > 0.2 * total,
         "tangent direction changed little: {diff} of {total}"
@@ -389,13 +395,29 @@ fn many_lights_through_the_light_bvh_agree_with_light_sampling() {
             "lights": {{{}}}}}"#,
         lights.join(",")
     );
-    let mis = render_technique(&json, 96, Technique::Mis, 31);
-    let light = render_technique(&json, 96, Technique::Light, 32);
-    assert_eq!(
-        mis.stats.non_finite_samples + light.stats.non_finite_samples,
-        0
-    );
-    assert_same_image(&mis.film, &light.film, 96, "many lights: mis vs light");
+    let mis = render_technique(&json, 192, Technique::Mis, 31);
+    let light = render_technique(&json, 192, Technique::Light, 32);
+    assert_eq!(mis.non_finite_samples + light.non_finite_samples, 0);
+    assert_same_image(&mis, &light, "many lights: mis vs light");
     // The lights are seen: the image is not black.
-    assert!(mis.film.beauty.iter().map(|p| p[0]).sum::<f32>() > 1.0);
+    assert!(mis.mean.iter().map(|p| p[0]).sum::<f64>() > 1.0);
+}
+
+#[test]
+fn t_quantiles_match_tables() {
+    // Two-sided 5 % and 1 % points of Student's t (standard tables), and the normal limit.
+    for (alpha, dof, want) in [
+        (0.05, 1.0, 12.706_204),
+        (0.05, 3.0, 3.182_446),
+        (0.01, 7.0, 3.499_483),
+        (0.01, 30.0, 2.749_996),
+        (0.001, 15.0, 4.072_765),
+    ] {
+        let t = t_for(alpha, dof);
+        assert!(
+            (t - want).abs() < 2e-6,
+            "t({alpha}, {dof}) = {t}, table {want}"
+        );
+    }
+    assert!((t_for(1e-4, 1e9) - z_for(1e-4)).abs() < 1e-6);
 }

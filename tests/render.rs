@@ -181,14 +181,15 @@ fn a_constant_dome_is_seen_exactly_and_lights_lambert_as_albedo_times_radiance()
         }
     }
     // An unoccluded Lambert plane under a uniform dome reflects exactly albedo * L.
-    let plane = render(
+    let plane = render_batches(
         r#"{"camera": {"position": [0, 1, 0], "look_at": [0, 0, -1], "fov_y": 40, "resolution": [8, 8]},
             "materials": {"m": {"diffuse": [0.5, 0.25, 1]}},
             "shapes": {"floor": {"disk": {"center": [0, 0, -1], "normal": [0, 1, 0], "radius": 1000}, "material": "m"}},
             "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 2}}}"#,
-        16,
+        64,
+        0,
     );
-    assert_matches_expectation(&plane.film, 16, |_| [1.0, 0.5, 2.0], 0.01);
+    assert_matches_expectation(&plane, |_| [1.0, 0.5, 2.0], 0.01);
 }
 
 #[test]
@@ -257,15 +258,66 @@ fn exr_has_the_aov_layers_and_metadata() {
     std::fs::remove_file(&path).ok();
 }
 
-/// The loop-limiter probe (src/render/probe.rs) finds the cap of Debian's stock Mesa 22.3
-/// lavapipe, which would silently drop samples of long dispatches, and none on Mesa 25.
+/// Iterations glsl/loop_probe.comp counts in a nest of `outer` × `inner` loops (a direct
+/// measurement, with other loop shapes than the probe's 2 × 40000).
+fn loop_count(ctx: &illum::vk::Context, outer: u32, inner: u32) -> u32 {
+    use ash::vk;
+    let data = ctx
+        .upload(
+            "loop count",
+            &[1u32, 1, 0],
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+        )
+        .unwrap();
+    let pipeline = illum::vk::ComputePipeline::new(
+        ctx,
+        "loop count",
+        illum::shaders::LOOP_PROBE_PLAIN,
+        &[(0, vk::DescriptorType::STORAGE_BUFFER)],
+        8,
+        &[],
+    )
+    .unwrap();
+    pipeline.bind_buffer(0, vk::DescriptorType::STORAGE_BUFFER, &data);
+    ctx.one_shot(|cmd| pipeline.dispatch(cmd, bytemuck::bytes_of(&[outer, inner]), [1, 1, 1]))
+        .unwrap();
+    let out: Vec<u32> = ctx.download(&data, 3).unwrap();
+    out[2]
+}
+
+/// The loop-limiter probe (src/render/probe.rs) agrees, on every driver, with direct
+/// measurements: loop nests below 65535 iterations in total always run in full; nests above it
+/// (one loop of 100000, four of 50000) run in full exactly when the probe says loops are not
+/// capped, and all fall short when it says they are. On llvmpipe it also knows the versions:
+/// Debian's stock Mesa 22.3 caps loops (it would silently drop samples of long dispatches),
+/// Mesa 25 does not.
 #[test]
-fn loop_limiter_probe_knows_the_drivers() {
+fn loop_limiter_probe_agrees_with_a_direct_measurement() {
     let ctx = context();
     let renderer = illum::render::Renderer::new(ctx.clone());
     let limited = renderer.loop_limited().unwrap();
     let driver = ctx.info().driver.clone();
-    eprintln!("{driver}: loops capped: {limited}");
+    for (outer, inner) in [(1, 60_000), (3, 20_000)] {
+        let n = loop_count(&ctx, outer, inner);
+        assert_eq!(
+            n,
+            outer * inner,
+            "{driver}: a nest of {outer} x {inner} ran {n} iterations"
+        );
+    }
+    let long: Vec<(u32, u32)> = [(1, 100_000), (4, 50_000)]
+        .iter()
+        .map(|&(outer, inner)| (outer * inner, loop_count(&ctx, outer, inner)))
+        .collect();
+    eprintln!("{driver}: loops capped: {limited}; iterations asked and run: {long:?}");
+    for &(asked, ran) in &long {
+        assert!(ran <= asked, "{driver}: {ran} of {asked} iterations");
+        assert_eq!(
+            limited,
+            ran < asked,
+            "{driver}: the probe says loops are capped: {limited}, but a nest of {asked} iterations ran {ran}"
+        );
+    }
     if ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE {
         if driver.contains("Mesa 22.") {
             assert!(limited, "{driver}");
@@ -274,5 +326,47 @@ fn loop_limiter_probe_knows_the_drivers() {
             assert!(!limited, "{driver}");
         }
     }
+    assert_no_validation_messages(&ctx);
+}
+
+/// `Renderer::render_seeds` (one pipeline for several independent renders, as the statistical
+/// tests use it) gives, seed for seed, exactly the images of separate renders.
+#[test]
+fn render_seeds_equals_separate_renders() {
+    let ctx = context();
+    let renderer = illum::render::Renderer::new(ctx.clone());
+    let s = scene(
+        r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0.5, 0], "fov_y": 40, "resolution": [8, 6]},
+            "materials": {"m": {"diffuse": [0.7, 0.6, 0.5], "specular": [{"model": "ggx", "roughness": 0.3}]}},
+            "shapes": {"s": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "m"},
+                       "f": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [4, 4]}, "material": "m"}},
+            "lights": {"l": {"sphere": {"center": [1, 2, 1], "radius": 0.3}, "intensity": 10}}}"#,
+    );
+    let settings = illum::render::RenderSettings {
+        spp: 5,
+        trace: trace_mode(),
+        ..Default::default()
+    };
+    let seeds = [5u64, 9, 5];
+    let many = renderer
+        .render_seeds(&s, &settings, &seeds, &mut |_, _| {})
+        .unwrap();
+    assert_eq!(many.len(), 3);
+    for (out, &seed) in many.iter().zip(&seeds) {
+        let one = renderer
+            .render(
+                &s,
+                &illum::render::RenderSettings {
+                    seed,
+                    ..settings.clone()
+                },
+                &mut |_, _| {},
+            )
+            .unwrap();
+        assert_eq!(out.stats.spp, 5);
+        assert_eq!(out.film.beauty, one.film.beauty, "seed {seed}");
+        assert_eq!(out.film.variance, one.film.variance, "seed {seed}");
+    }
+    assert_ne!(many[0].film.beauty, many[1].film.beauty);
     assert_no_validation_messages(&ctx);
 }

@@ -270,6 +270,21 @@ impl Renderer {
         settings: &RenderSettings,
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<RenderOutput> {
+        let mut out = self.render_seeds(scene, settings, &[settings.seed], progress)?;
+        Ok(out.pop().expect("one render per seed"))
+    }
+
+    /// Renders `scene` once per seed in `seeds` (`settings.seed` is ignored), each exactly as
+    /// [`Renderer::render`] would with that seed, but with one upload, trace structure and
+    /// pipeline for all: independent renders for the price of their samples (the pipeline
+    /// compilation dominates small renders on CPU drivers). Used by statistical tests.
+    pub fn render_seeds(
+        &self,
+        scene: &Scene,
+        settings: &RenderSettings,
+        seeds: &[u64],
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<Vec<RenderOutput>> {
         let ctx = &self.ctx;
         let t0 = Instant::now();
         if settings.spp == 0 {
@@ -387,7 +402,6 @@ impl Renderer {
                 .as_ref()
                 .is_some_and(|c| c.load(Ordering::Relaxed))
         };
-        let mut interrupted = false;
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows,
         // never across a film block (film.rs): blocks leave the device whole.
@@ -399,142 +413,155 @@ impl Renderer {
         } else {
             (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_BLOCK)) as u32
         };
-        let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
-        let mut sums = FilmSums::new(window);
-        let mut passes = Vec::new();
-        let mut last_resolved = None;
-        while done < budget && !interrupted {
-            // Passes grow by half the samples so far (log-spaced points on the error curve);
-            // under a time budget a pass is sized to the time left at the measured rate.
-            let mut pass = (done / 2).max(1).min(budget - done);
-            if let Some(t) = settings.time {
-                if wall >= t {
-                    break;
-                }
-                if done > 0 {
-                    let rate = f64::from(done) / wall.max(1e-9);
-                    pass = pass.min(((t - wall) * rate).max(1.0) as u32);
-                }
+        let mut outputs = Vec::with_capacity(seeds.len());
+        for (index, &seed) in seeds.iter().enumerate() {
+            let t0 = if index == 0 { t0 } else { Instant::now() };
+            if index > 0 {
+                film::clear(ctx, &film_buffer)?;
             }
-            let start = Instant::now();
-            let mut k = 0;
-            while k < pass {
-                let s = first + done + k;
-                let (block_start, block_end) = film::block_of(s, settings.spp);
-                let n = per_dispatch.min(pass - k).min(block_end - s);
-                for y0 in (window.y0..window.y1).step_by(TILE as usize) {
-                    for x0 in (window.x0..window.x1).step_by(TILE as usize) {
-                        let pc = PassConstants {
-                            first_sample: s,
-                            sample_count: n,
-                            seed_lo: settings.seed as u32,
-                            seed_hi: (settings.seed >> 32) as u32,
-                            tile: [x0, y0, TILE.min(window.x1 - x0), TILE.min(window.y1 - y0)],
-                        };
-                        ctx.one_shot(|cmd| {
+            let mut interrupted = false;
+            let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
+            let mut sums = FilmSums::new(window);
+            let mut passes = Vec::new();
+            let mut last_resolved = None;
+            while done < budget && !interrupted {
+                // Passes grow by half the samples so far (log-spaced points on the error curve);
+                // under a time budget a pass is sized to the time left at the measured rate.
+                let mut pass = (done / 2).max(1).min(budget - done);
+                if let Some(t) = settings.time {
+                    if wall >= t {
+                        break;
+                    }
+                    if done > 0 {
+                        let rate = f64::from(done) / wall.max(1e-9);
+                        pass = pass.min(((t - wall) * rate).max(1.0) as u32);
+                    }
+                }
+                let start = Instant::now();
+                let mut k = 0;
+                while k < pass {
+                    let s = first + done + k;
+                    let (block_start, block_end) = film::block_of(s, settings.spp);
+                    let n = per_dispatch.min(pass - k).min(block_end - s);
+                    for y0 in (window.y0..window.y1).step_by(TILE as usize) {
+                        for x0 in (window.x0..window.x1).step_by(TILE as usize) {
+                            let pc = PassConstants {
+                                first_sample: s,
+                                sample_count: n,
+                                seed_lo: seed as u32,
+                                seed_hi: (seed >> 32) as u32,
+                                tile: [x0, y0, TILE.min(window.x1 - x0), TILE.min(window.y1 - y0)],
+                            };
+                            ctx.one_shot(|cmd| {
+                                if let Some(t) = &timer {
+                                    t.start(cmd);
+                                }
+                                kernel.record(cmd, &pc);
+                                if let Some(t) = &timer {
+                                    t.stop(cmd);
+                                }
+                            })?;
                             if let Some(t) = &timer {
-                                t.start(cmd);
+                                device += t.seconds()?;
                             }
-                            kernel.record(cmd, &pc);
-                            if let Some(t) = &timer {
-                                t.stop(cmd);
-                            }
-                        })?;
-                        if let Some(t) = &timer {
-                            device += t.seconds()?;
                         }
                     }
-                }
-                k += n;
-                if s + n == block_end {
-                    // The block is complete: exact sums if the job owns all of it, else kept
-                    // whole as a boundary block.
-                    let block = film::download_window(ctx, &film_buffer, w, window)?;
-                    if block_start >= range.0 && block_end <= range.1 {
-                        sums.add_block(&block);
-                    } else {
-                        sums.boundary.push(BoundaryBlock {
-                            start: block_start,
-                            end: block_end,
-                            sums: block,
-                        });
+                    k += n;
+                    if s + n == block_end {
+                        // The block is complete: exact sums if the job owns all of it, else kept
+                        // whole as a boundary block.
+                        let block = film::download_window(ctx, &film_buffer, w, window)?;
+                        if block_start >= range.0 && block_end <= range.1 {
+                            sums.add_block(&block);
+                        } else {
+                            sums.boundary.push(BoundaryBlock {
+                                start: block_start,
+                                end: block_end,
+                                sums: block,
+                            });
+                        }
+                        film::clear(ctx, &film_buffer)?;
                     }
-                    film::clear(ctx, &film_buffer)?;
+                    progress(done + k, budget);
+                    if cancelled() {
+                        // Every pixel has done + k samples: stop here, keeping them.
+                        interrupted = true;
+                        break;
+                    }
                 }
-                progress(done + k, budget);
-                if cancelled() {
-                    // Every pixel has done + k samples: stop here, keeping them.
-                    interrupted = true;
-                    break;
+                done += k;
+                let elapsed = start.elapsed().as_secs_f64();
+                wall += elapsed;
+                if timer.is_none() {
+                    device += elapsed;
+                }
+                let mut report = PassReport {
+                    pass: passes.len() as u32,
+                    spp: done,
+                    device_seconds: device,
+                    wall_seconds: wall,
+                    ..Default::default()
+                };
+                if evaluate {
+                    // Reads the unfinished block without moving it: the block grid stays fixed.
+                    let mut peek = FilmSums::new(window);
+                    peek.sums = sums.with_boundary();
+                    if (first + done) % FILM_BLOCK != 0 && first + done != last {
+                        peek.add_block(&film::download_window(ctx, &film_buffer, w, window)?);
+                    }
+                    let r = film::resolve(&peek.sums, window.width(), window.height(), done);
+                    evaluate_pass(&mut report, &r, settings.reference.as_deref());
+                    passes.push(report);
+                    last_resolved = Some(r);
+                } else {
+                    passes.clear();
+                    passes.push(report);
                 }
             }
-            done += k;
-            let elapsed = start.elapsed().as_secs_f64();
-            wall += elapsed;
-            if timer.is_none() {
-                device += elapsed;
+            if done < budget {
+                // A time budget ended the render inside a block: keep what was rendered.
+                let block = film::download_window(ctx, &film_buffer, w, window)?;
+                sums.add_block(&block);
             }
-            let mut report = PassReport {
-                pass: passes.len() as u32,
-                spp: done,
-                device_seconds: device,
-                wall_seconds: wall,
-                ..Default::default()
+            let resolved = match last_resolved {
+                Some(r) if r.spp == done => r,
+                _ => film::resolve(&sums.with_boundary(), window.width(), window.height(), done),
             };
-            if evaluate {
-                // Reads the unfinished block without moving it: the block grid stays fixed.
-                let mut peek = FilmSums::new(window);
-                peek.sums = sums.with_boundary();
-                if (first + done) % FILM_BLOCK != 0 && first + done != last {
-                    peek.add_block(&film::download_window(ctx, &film_buffer, w, window)?);
-                }
-                let r = film::resolve(&peek.sums, window.width(), window.height(), done);
-                evaluate_pass(&mut report, &r, settings.reference.as_deref());
-                passes.push(report);
-                last_resolved = Some(r);
-            } else {
-                passes.clear();
-                passes.push(report);
+            if !evaluate && let Some(p) = passes.last_mut() {
+                evaluate_pass(p, &resolved, settings.reference.as_deref());
+            }
+            outputs.push(RenderOutput {
+                stats: RenderStats {
+                    upload_seconds,
+                    warmup_seconds,
+                    // Later seeds reuse the set-up: only the film is cleared.
+                    setup_seconds: if index == 0 { setup_seconds } else { 0.0 },
+                    build: build.clone(),
+                    render_seconds: wall,
+                    device_seconds: device,
+                    total_seconds: t0.elapsed().as_secs_f64(),
+                    spp: done,
+                    non_finite_samples: resolved.non_finite_samples,
+                    rays: resolved.rays,
+                    trace: trace.name(),
+                    dark_lights: gpu.dark_lights.clone(),
+                    emitters: gpu.emitters,
+                    clamped_samples: resolved.clamped_samples,
+                    interrupted,
+                },
+                film: resolved.film,
+                passes,
+                job: JobSums {
+                    range: (range.0, range.1.min(first + done)),
+                    total_spp: settings.spp,
+                    sums,
+                },
+            });
+            if interrupted {
+                break;
             }
         }
-        if done < budget {
-            // A time budget ended the render inside a block: keep what was rendered.
-            let block = film::download_window(ctx, &film_buffer, w, window)?;
-            sums.add_block(&block);
-        }
-        let resolved = match last_resolved {
-            Some(r) if r.spp == done => r,
-            _ => film::resolve(&sums.with_boundary(), window.width(), window.height(), done),
-        };
-        if !evaluate && let Some(p) = passes.last_mut() {
-            evaluate_pass(p, &resolved, settings.reference.as_deref());
-        }
-        Ok(RenderOutput {
-            stats: RenderStats {
-                upload_seconds,
-                warmup_seconds,
-                setup_seconds,
-                build,
-                render_seconds: wall,
-                device_seconds: device,
-                total_seconds: t0.elapsed().as_secs_f64(),
-                spp: done,
-                non_finite_samples: resolved.non_finite_samples,
-                rays: resolved.rays,
-                trace: trace.name(),
-                dark_lights: gpu.dark_lights.clone(),
-                emitters: gpu.emitters,
-                clamped_samples: resolved.clamped_samples,
-                interrupted,
-            },
-            film: resolved.film,
-            passes,
-            job: JobSums {
-                range: (range.0, range.1.min(first + done)),
-                total_spp: settings.spp,
-                sums,
-            },
-        })
+        Ok(outputs)
     }
 }
 

@@ -71,41 +71,152 @@ pub fn temp_path(name: &str) -> std::path::PathBuf {
     dir.join(name)
 }
 
-/// Checks a rendered film of `spp` samples against the per-pixel expectation `expected(i)` (RGB)
-/// with a t-test per pixel and channel, using the Variance AOV, at family-wise significance
-/// `alpha` (Šidák over all tests); and the image mean at the same level. Pixels with zero
-/// variance must match to float rounding.
-pub fn assert_matches_expectation(
-    film: &illum::output::Film,
-    spp: u32,
-    expected: impl Fn(usize) -> [f64; 3],
-    alpha: f64,
-) {
-    let var = film.variance.as_ref().expect("variance AOV");
-    let tests = (film.beauty.len() * 3) as f64;
-    let per = 1.0 - (1.0 - alpha).powf(1.0 / tests);
-    let z = t_for(per, f64::from(spp.max(2) - 1));
-    let (mut sum_d, mut sum_v) = ([0.0f64; 3], [0.0f64; 3]);
-    for (i, p) in film.beauty.iter().enumerate() {
-        let e = expected(i);
-        for c in 0..3 {
-            let d = f64::from(p[c]) - e[c];
-            let v = f64::from(var[i][c]);
-            let tol = z * v.sqrt() + 1e-5 * e[c].abs() + 1e-6;
-            assert!(
-                d.abs() <= tol,
-                "pixel {i} channel {c}: {} vs expected {} (± {tol})",
-                p[c],
-                e[c]
-            );
-            sum_d[c] += d;
-            sum_v[c] += v;
+/// Independent renders per image in the statistical tests: the variance of each pixel mean is
+/// estimated from their spread (BATCHES − 1 degrees of freedom), never taken from the
+/// renderer's own Variance AOV, which a renderer could over-report and pass every test.
+pub const BATCHES: u32 = 16;
+
+/// `k` renders of one scene with independent seeds, `spp / k` samples each, on one renderer.
+pub struct Batches {
+    pub k: u32,
+    /// Per pixel and channel: the mean of the k render means.
+    pub mean: Vec<[f64; 3]>,
+    /// Per pixel and channel: the variance of `mean`, estimated from the spread of the k means
+    /// (sample variance / k).
+    pub var: Vec<[f64; 3]>,
+    pub non_finite_samples: u64,
+}
+
+impl Batches {
+    /// Renders `settings.spp` samples per pixel in `k` independent renders (seeds
+    /// `settings.seed · 64 + j`) with one pipeline (`Renderer::render_seeds`).
+    pub fn render(
+        renderer: &Renderer,
+        scene: &Scene,
+        settings: &RenderSettings,
+        k: u32,
+    ) -> Batches {
+        assert!(
+            (2..=64).contains(&k) && settings.spp % k == 0,
+            "{} spp in {k} batches",
+            settings.spp
+        );
+        let seeds: Vec<u64> = (0..u64::from(k)).map(|j| settings.seed * 64 + j).collect();
+        let s = RenderSettings {
+            spp: settings.spp / k,
+            ..settings.clone()
+        };
+        let outs = renderer
+            .render_seeds(scene, &s, &seeds, &mut |_, _| {})
+            .unwrap_or_else(|e| panic!("render failed: {e}"));
+        let mut sum: Vec<[f64; 3]> = vec![[0.0; 3]; outs[0].film.beauty.len()];
+        let mut sum2 = sum.clone();
+        let mut non_finite_samples = 0;
+        for out in &outs {
+            non_finite_samples += out.stats.non_finite_samples;
+            for (i, p) in out.film.beauty.iter().enumerate() {
+                for c in 0..3 {
+                    let x = f64::from(p[c]);
+                    sum[i][c] += x;
+                    sum2[i][c] += x * x;
+                }
+            }
+        }
+        let kf = f64::from(k);
+        let mean: Vec<[f64; 3]> = sum.iter().map(|s| s.map(|x| x / kf)).collect();
+        let var = sum2
+            .iter()
+            .zip(&mean)
+            .map(|(s2, m)| {
+                let mut v = [0.0; 3];
+                for c in 0..3 {
+                    v[c] = ((s2[c] - kf * m[c] * m[c]) / (kf - 1.0)).max(0.0) / kf;
+                }
+                v
+            })
+            .collect();
+        Batches {
+            k,
+            mean,
+            var,
+            non_finite_samples,
         }
     }
-    let n = film.beauty.len() as f64;
-    let zm = z_for(alpha / 3.0);
+}
+
+/// Renders `spp` samples per pixel of `json` in BATCHES independent renders on a fresh validated
+/// context, and checks that validation stayed silent.
+pub fn render_batches(json: &str, spp: u32, seed: u64) -> Batches {
+    let ctx = context();
+    let settings = RenderSettings {
+        spp,
+        seed,
+        trace: trace_mode(),
+        ..Default::default()
+    };
+    let b = Batches::render(
+        &Renderer::new(ctx.clone()),
+        &scene(json),
+        &settings,
+        BATCHES,
+    );
+    assert_no_validation_messages(&ctx);
+    b
+}
+
+/// Welch's degrees of freedom of a sum of independent variance estimates (v_i, dof_i).
+pub fn welch_dof(parts: &[(f64, f64)]) -> f64 {
+    let total: f64 = parts.iter().map(|p| p.0).sum();
+    let denom: f64 = parts.iter().map(|p| p.0 * p.0 / p.1).sum();
+    if denom > 0.0 {
+        total * total / denom
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Checks `k` independent renders against the per-pixel expectation `expected(i)` (RGB) with a
+/// t-test per pixel and channel (k − 1 degrees of freedom, variance from the renders' spread), at
+/// family-wise significance `alpha` (Šidák over all tests); and the image mean per channel at
+/// the same level (Welch's dof). Pixels whose renders all agree must match to float rounding.
+pub fn assert_matches_expectation(b: &Batches, expected: impl Fn(usize) -> [f64; 3], alpha: f64) {
+    let tests = (b.mean.len() * 3) as f64;
+    let per = 1.0 - (1.0 - alpha).powf(1.0 / tests);
+    let dof = f64::from(b.k - 1);
+    let t = t_for(per, dof);
+    let (mut sum_d, mut parts) = ([0.0f64; 3], [vec![], vec![], vec![]]);
+    let mut worst = 0.0f64;
+    for (i, (m, v)) in b.mean.iter().zip(&b.var).enumerate() {
+        let e = expected(i);
+        for c in 0..3 {
+            let d = m[c] - e[c];
+            let floor = 1e-5 * e[c].abs() + 1e-6;
+            let tol = t * v[c].sqrt() + floor;
+            worst = worst.max((d.abs() - floor).max(0.0) / v[c].sqrt().max(1e-300));
+            assert!(
+                d.abs() <= tol,
+                "pixel {i} channel {c}: {} vs expected {} (± {tol}, t = {:.2}, limit {t:.2})",
+                m[c],
+                e[c],
+                d / v[c].sqrt()
+            );
+            sum_d[c] += d;
+            parts[c].push((v[c], dof));
+        }
+    }
+    eprintln!(
+        "largest |t| over pixels: {worst:.2} (limit {t:.2}, {} dof)",
+        b.k - 1
+    );
+    let n = b.mean.len() as f64;
     for c in 0..3 {
-        let tol = zm * sum_v[c].sqrt() / n + 1e-6;
+        let var: f64 = parts[c].iter().map(|p| p.0).sum();
+        let tm = t_for(alpha / 3.0, welch_dof(&parts[c]));
+        let tol = tm * var.sqrt() / n + 1e-6;
+        eprintln!(
+            "image mean channel {c}: t = {:.2} (limit {tm:.2})",
+            sum_d[c] / var.sqrt().max(1e-300)
+        );
         assert!(
             (sum_d[c] / n).abs() <= tol,
             "channel {c}: image mean off by {} (± {tol})",
