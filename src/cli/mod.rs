@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod compare;
 pub mod devices;
+pub mod merge;
 pub mod render;
 pub mod schema;
 mod signal;
@@ -32,6 +33,9 @@ pub enum Command {
     Bench(bench::BenchCommand),
     /// Render the stress suite (scenes/stress) and write its Markdown report.
     Stress(stress::StressArgs),
+    /// Merge the jobs of a split render (partial EXRs of render --samples/--crop) into one image,
+    /// bit-identical to rendering it in one piece.
+    Merge(merge::MergeArgs),
 }
 
 /// Runs a command, prints its error if any, and returns the process exit status: 0, 1 for an
@@ -44,6 +48,7 @@ pub fn run(command: Command) -> i32 {
         Command::Schema => schema::run(),
         Command::Bench(b) => bench::run(&b),
         Command::Stress(a) => stress::run(&a),
+        Command::Merge(a) => merge::run(&a),
     };
     match result {
         Ok(()) => 0,

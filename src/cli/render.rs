@@ -2,7 +2,7 @@
 
 use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
 use crate::output::{write_exr, write_png};
-use crate::render::{RenderSettings, Renderer, Technique};
+use crate::render::{RenderSettings, Renderer, Technique, Window};
 use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
@@ -63,10 +63,45 @@ pub struct RenderArgs {
     /// Enable the Vulkan validation layers (also on with ILLUM_VALIDATION=1).
     #[arg(long)]
     pub validate: bool,
+    /// Render only samples A..B (A included, B excluded) of the --spp-sample image: one job of a
+    /// split render, written as a partial EXR for `illum merge` (docs/farm.md).
+    #[arg(long, value_name = "A..B", value_parser = parse_range)]
+    pub samples: Option<(u32, u32)>,
+    /// Render only the pixel window X0,Y0,X1,Y1 (X1, Y1 excluded): one job of a split render,
+    /// written as a partial EXR for `illum merge`.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
+    pub crop: Option<Window>,
+}
+
+fn parse_range(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("{s:?} is not A..B"))?;
+    let n = |x: &str| {
+        x.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("{x:?} in {s:?} is not a sample index"))
+    };
+    Ok((n(a)?, n(b)?))
+}
+
+fn parse_crop(s: &str) -> std::result::Result<Window, String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<u32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("{s:?} is not X0,Y0,X1,Y1 (pixel indices)"))?;
+    let [x0, y0, x1, y1] = v[..] else {
+        return Err(format!("{s:?} is not X0,Y0,X1,Y1 (four pixel indices)"));
+    };
+    Ok(Window { x0, y0, x1, y1 })
 }
 
 pub fn run(a: &RenderArgs) -> Result<()> {
     crate::output::check_writable(&a.output)?;
+    if a.samples.is_some() || a.crop.is_some() {
+        return run_job(a);
+    }
     let ext = a
         .output
         .extension()
@@ -346,4 +381,91 @@ fn summary(
         );
     }
     eprintln!("{line}");
+}
+
+/// One job of a split render: samples A..B and/or a pixel window, written as a partial EXR
+/// (src/output/partial.rs) that `illum merge` combines with the others, bit for bit.
+fn run_job(a: &RenderArgs) -> Result<()> {
+    let ext = a
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase());
+    if ext.as_deref() != Some("exr") {
+        bail!(
+            "-o {}: a job of a split render (--samples, --crop) writes a partial EXR: name a .exr file",
+            a.output.display()
+        );
+    }
+    if a.time.is_some()
+        || a.reference.is_some()
+        || a.report.is_some()
+        || a.report_plot.is_some()
+        || a.png
+    {
+        bail!(
+            "--samples and --crop render one job of an image: they take --spp, not --time, \
+             --reference, --report, --report-plot or --png (merge the jobs first)"
+        );
+    }
+    let Some(spp) = a.spp else {
+        bail!("--samples and --crop need --spp: the samples per pixel of the whole image");
+    };
+    check_outputs([a.output.as_path()])?;
+    let scene = a.scene.load()?;
+    let cancel = signal::install();
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: a.validate,
+    })?;
+    let renderer = Renderer::new(ctx.clone());
+    let settings = RenderSettings {
+        integrator: a.integrator.settings(a.technique),
+        spp,
+        seed: a.seed,
+        trace: a.trace,
+        clamp: a.clamp,
+        cancel: Some(cancel),
+        samples: a.samples,
+        crop: a.crop,
+        ..Default::default()
+    };
+    let bar = progress_bar(a.quiet, spp, None);
+    let setup_done = announce_compiles(&ctx, &bar, a.quiet);
+    let out = renderer.render(&scene, &settings, &mut |done, budget| {
+        setup_done.store(true, Ordering::SeqCst);
+        bar.set_length(u64::from(budget));
+        bar.set_position(u64::from(done));
+    });
+    setup_done.store(true, Ordering::SeqCst);
+    ctx.set_kernel_listener(None);
+    bar.finish_and_clear();
+    let out = out?;
+    if out.stats.interrupted {
+        // A part is all or nothing: the scheduler reruns an interrupted job.
+        return Err(Interrupted {
+            signal: signal::received().unwrap_or(libc::SIGINT),
+            kept: format!(
+                "wrote nothing: a job is written only when complete ({} samples of its range were done); run it again",
+                out.stats.spp
+            ),
+        }
+        .into());
+    }
+    let info = crate::render::job::part_info(&scene, &settings, &out, &ctx.info().name);
+    crate::output::partial::write_partial(&a.output, &info, &out.job.sums)?;
+    super::check_validation(&ctx)?;
+    if !a.quiet {
+        eprintln!(
+            "illum: job samples {}..{} of {spp}, pixels {} of {}x{}: {:.2} s rendering, {:.2} s set-up; wrote {}",
+            info.samples.0,
+            info.samples.1,
+            info.window,
+            info.frame.0,
+            info.frame.1,
+            info.render_seconds,
+            info.setup_seconds,
+            a.output.display()
+        );
+    }
+    Ok(())
 }

@@ -133,10 +133,8 @@ pub fn write_partial(
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
-    Image::from_layer(layer)
-        .write()
-        .to_file(path)
-        .map_err(write_err)
+    let image = Image::from_layer(layer);
+    super::write_atomically(path, |tmp| image.write().to_file(tmp).map_err(write_err))
 }
 
 /// Reads a partial EXR written by [`write_partial`].

@@ -9,7 +9,6 @@ use crate::error::{Error, Result};
 use crate::output::Film;
 use crate::output::partial::PartInfo;
 use crate::scene::Scene;
-use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
@@ -170,8 +169,6 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
     }
     let (w, h) = f.frame;
     let spp = f.spp;
-    // Windows: identical or disjoint, and together the whole frame.
-    let mut windows: Vec<Window> = Vec::new();
     for p in parts {
         let win = p.info.window;
         if win.x1 > w || win.y1 > h || win.x0 >= win.x1 || win.y0 >= win.y1 {
@@ -181,66 +178,90 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
                 format!("{win} is not a window of the {w}x{h} frame"),
             ));
         }
-        if let Some(o) = windows.iter().find(|o| **o != win && o.overlaps(&win)) {
-            return Err(part_error(
-                p,
-                "illum.crop",
-                format!(
-                    "{win} overlaps the window {o} of another part (a part from another crop grid?)"
-                ),
-            ));
-        }
-        if !windows.contains(&win) {
-            windows.push(win);
-        }
     }
-    let covered: usize = windows.iter().map(Window::pixels).sum();
-    if covered != w as usize * h as usize {
-        return Err(Error::Invalid(format!(
-            "illum merge: the parts' windows cover {covered} of the {w}x{h} frame's {} pixels (a tile is missing)",
-            w as usize * h as usize
-        )));
-    }
-    // Per window: sample ranges that tile 0..spp.
-    let mut sums = vec![[0i128; FILM_CHANNELS]; w as usize * h as usize];
-    for win in &windows {
-        let mut here: Vec<&Part> = parts.iter().filter(|p| p.info.window == *win).collect();
-        here.sort_by_key(|p| p.info.samples);
-        let mut next = 0;
-        for (k, p) in here.iter().enumerate() {
-            let (a, b) = p.info.samples;
-            if a < next {
-                return Err(part_error(
-                    p,
-                    "illum.samples",
-                    format!(
-                        "{a}..{b} overlaps {}..{} of {}",
-                        here[k - 1].info.samples.0,
-                        here[k - 1].info.samples.1,
-                        here[k - 1].path.display()
-                    ),
-                ));
+    // Coverage: cut the frame along every window's edges; in each cell, the parts whose window
+    // holds it must tile the samples 0..spp.
+    let cuts = |lo: fn(&Window) -> u32, hi: fn(&Window) -> u32, end: u32| {
+        let mut v: Vec<u32> = parts
+            .iter()
+            .flat_map(|p| [lo(&p.info.window), hi(&p.info.window)])
+            .chain([0, end])
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let xs = cuts(|w| w.x0, |w| w.x1, w);
+    let ys = cuts(|w| w.y0, |w| w.y1, h);
+    for y in ys.windows(2) {
+        for x in xs.windows(2) {
+            let cell = Window {
+                x0: x[0],
+                y0: y[0],
+                x1: x[1],
+                y1: y[1],
+            };
+            let mut here: Vec<&Part> = parts
+                .iter()
+                .filter(|p| p.info.window.overlaps(&cell))
+                .collect();
+            here.sort_by_key(|p| p.info.samples);
+            let mut next = 0;
+            for (k, p) in here.iter().enumerate() {
+                let (a, b) = p.info.samples;
+                if a < next {
+                    let q = here[k - 1];
+                    return Err(part_error(
+                        p,
+                        "illum.samples, illum.crop",
+                        format!(
+                            "samples {a}..{b} of pixels {cell} overlaps samples {}..{} of {} (a part given twice, or from another split?)",
+                            q.info.samples.0,
+                            q.info.samples.1,
+                            q.path.display()
+                        ),
+                    ));
+                }
+                if a > next {
+                    return Err(Error::Invalid(format!(
+                        "illum merge: samples {next}..{a} of pixels {cell} are in no part (a part is missing)"
+                    )));
+                }
+                next = b;
             }
-            if a > next {
+            if next != spp {
                 return Err(Error::Invalid(format!(
-                    "illum merge: samples {next}..{a} of window {win} are in no part (a part is missing)"
+                    "illum merge: samples {next}..{spp} of pixels {cell} are in no part (a part is missing)"
                 )));
             }
-            next = b;
         }
-        if next != spp {
-            return Err(Error::Invalid(format!(
-                "illum merge: samples {next}..{spp} of window {win} are in no part (a part is missing)"
-            )));
+    }
+    // Exact sums of the wholly owned blocks, then each shared block once per pixel (the jobs
+    // that share a block rendered it whole, so their copies must agree).
+    let mut sums = vec![[0i128; FILM_CHANNELS]; w as usize * h as usize];
+    let frame_index = |win: &Window, i: usize| {
+        let (x, y) = (
+            win.x0 + i as u32 % win.width(),
+            win.y0 + i as u32 / win.width(),
+        );
+        (y * w + x) as usize
+    };
+    for p in parts {
+        for (i, s) in p.sums.sums.iter().enumerate() {
+            let acc = &mut sums[frame_index(&p.info.window, i)];
+            for (a, x) in acc.iter_mut().zip(s) {
+                *a += x;
+            }
         }
-        // Exact sums of the wholly owned blocks, then each shared block once.
-        let mut acc = FilmSums::new(*win);
-        let mut blocks: HashMap<(u32, u32), (&Part, &film::BoundaryBlock)> = HashMap::new();
-        for p in &here {
-            acc.add_sums(&p.sums.sums);
-            for b in &p.sums.boundary {
-                match blocks.get(&(b.start, b.end)) {
-                    Some((q, other)) if other.sums != b.sums => {
+    }
+    // Per pixel: the blocks added so far, as (block start, part, block, index in that part).
+    let mut seen: Vec<Vec<(u32, usize, usize, usize)>> = vec![Vec::new(); sums.len()];
+    for (pi, p) in parts.iter().enumerate() {
+        for (bi, b) in p.sums.boundary.iter().enumerate() {
+            for (i, v) in b.sums.iter().enumerate() {
+                let at = frame_index(&p.info.window, i);
+                if let Some(&(_, pj, bj, j)) = seen[at].iter().find(|s| s.0 == b.start) {
+                    if parts[pj].sums.boundary[bj].sums[j] != *v {
                         return Err(part_error(
                             p,
                             "block",
@@ -248,28 +269,17 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
                                 "its samples {}..{} differ from those of {}",
                                 b.start,
                                 b.end,
-                                q.path.display()
+                                parts[pj].path.display()
                             ),
                         ));
                     }
-                    Some(_) => {}
-                    None => {
-                        blocks.insert((b.start, b.end), (p, b));
-                    }
+                    continue;
+                }
+                seen[at].push((b.start, pi, bi, i));
+                for (a, x) in sums[at].iter_mut().zip(v) {
+                    *a += film::to_fixed(*x);
                 }
             }
-        }
-        let mut keys: Vec<_> = blocks.keys().copied().collect();
-        keys.sort_unstable();
-        for key in keys {
-            acc.add_block(&blocks[&key].1.sums);
-        }
-        for (i, s) in acc.sums.iter().enumerate() {
-            let (x, y) = (
-                win.x0 + i as u32 % win.width(),
-                win.y0 + i as u32 / win.width(),
-            );
-            sums[(y * w + x) as usize] = *s;
         }
     }
     let r = film::resolve(&sums, w, h, spp);

@@ -1,0 +1,102 @@
+//! `illum merge`: the jobs of a split render (partial EXRs of `illum render --samples/--crop`)
+//! into the image a render in one piece writes, bit for bit (src/render/job.rs).
+
+use super::check_outputs;
+use crate::output::partial::read_partial;
+use crate::output::{ImageMetadata, write_exr, write_png};
+use crate::render::job::{Part, merge};
+use anyhow::{Context as _, Result, bail};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// The jobs' partial EXRs: together they must cover every pixel and sample exactly once.
+    #[arg(required = true, value_name = "PART")]
+    pub parts: Vec<PathBuf>,
+    /// The merged image: .exr (all layers), or .png (then the .exr is written beside it too).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write an sRGB PNG of the beauty beside the EXR.
+    #[arg(long)]
+    pub png: bool,
+    /// No summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+pub fn run(a: &MergeArgs) -> Result<()> {
+    let ext = a
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase());
+    let (exr_path, png_path) = match ext.as_deref() {
+        Some("exr") => (
+            a.output.clone(),
+            a.png.then(|| a.output.with_extension("png")),
+        ),
+        Some("png") => (a.output.with_extension("exr"), Some(a.output.clone())),
+        _ => bail!(
+            "-o {}: the output must end in .exr or .png",
+            a.output.display()
+        ),
+    };
+    check_outputs(
+        [Some(&exr_path), png_path.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path),
+    )?;
+    let start = Instant::now();
+    let mut parts = Vec::with_capacity(a.parts.len());
+    for path in &a.parts {
+        let (info, sums) =
+            read_partial(path).with_context(|| format!("illum merge: part {}", path.display()))?;
+        parts.push(Part {
+            path: path.clone(),
+            info,
+            sums,
+        });
+    }
+    let read_seconds = start.elapsed().as_secs_f64();
+    let m = merge(&parts)?;
+    let mut extra = vec![
+        ("illum.trace".to_string(), m.trace.clone()),
+        ("illum.settings".into(), m.settings.clone()),
+        (
+            "illum.nonFiniteSamples".into(),
+            m.non_finite_samples.to_string(),
+        ),
+        ("illum.mergedParts".into(), parts.len().to_string()),
+    ];
+    if m.clamped_samples > 0 {
+        extra.push(("illum.clampedSamples".into(), m.clamped_samples.to_string()));
+    }
+    let meta = ImageMetadata {
+        spp: m.spp,
+        render_seconds: m.render_seconds,
+        setup_seconds: m.setup_seconds,
+        device: m.devices.join(", "),
+        seed: m.seed,
+        extra,
+    };
+    write_exr(&exr_path, &m.film, &meta)?;
+    if let Some(p) = &png_path {
+        write_png(p, &m.film)?;
+    }
+    if !a.quiet {
+        eprintln!(
+            "illum: merged {} parts into {}x{} at {} spp in {:.2} s (reading {:.2} s); the parts rendered for {:.2} s after {:.2} s of set-up; wrote {}",
+            parts.len(),
+            m.film.width,
+            m.film.height,
+            m.spp,
+            start.elapsed().as_secs_f64(),
+            read_seconds,
+            m.render_seconds,
+            m.setup_seconds,
+            exr_path.display()
+        );
+    }
+    Ok(())
+}
