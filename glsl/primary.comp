@@ -24,14 +24,15 @@ void main() {
         vec2 film_uv = (vec2(pix) + rng_next2(rng)) / vec2(width, height);
         vec2 ndc = 2.0 * film_uv - 1.0;
         vec3 d = normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz - ndc.y * frame.cam_up.xyz);
-        Hit h = trace_closest(vec3(0.0), d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
+        vec3 o = frame.cam_origin.xyz;
+        Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
         g_rays += 1u;
         vec3 beauty = vec3(0.0);
         vec3 le = vec3(0.0);   // emission seen directly
         if (h.kind == HIT_NONE) {
             le = dome_radiance(d);
         } else {
-            Surface s = surface_at(h, vec3(0.0), d);
+            Surface s = surface_at(h, o, d);
             le = surface_emission(s, d);
             acc.normal += vec4(s.ns, h.t);
             if (s.material != NONE) {

@@ -126,6 +126,9 @@ struct Frame {
     vec4 cam_forward;     // xyz: unit view direction
     vec4 cam_right;       // xyz: right, scaled by tan(fov_y / 2) * aspect
     vec4 cam_up;          // xyz: up, scaled by tan(fov_y / 2)
+    vec4 cam_origin;      // xyz: the camera's position relative to the scene's upload origin (the
+                          // camera it was prepared with: 0 unless a prepared scene renders a
+                          // moved camera)
     uvec4 size;           // width, height, light count, shape count
     uvec4 counts;         // instance count, material count, texture count, dome light index or NONE
     uvec4 integrator;     // technique (TECHNIQUE_*), most light samples per light, BRDF samples per

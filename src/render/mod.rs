@@ -10,12 +10,14 @@ pub mod dome;
 pub mod film;
 pub mod job;
 mod lights;
+mod prepared;
 mod primary;
 mod probe;
 mod upload;
 
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
+pub use prepared::PreparedScene;
 pub use upload::GpuScene;
 
 use crate::error::{Error, Result};
@@ -23,7 +25,7 @@ use crate::layout::*;
 use crate::metrics::{self, ErrorMetrics};
 use crate::scene::Scene;
 use crate::trace::BuildStats;
-use crate::trace::{TraceMode, TraceStructure};
+use crate::trace::TraceMode;
 use crate::vk::{Context, GpuTimer, MemoryLocation};
 use ash::vk;
 use primary::PrimaryKernel;
@@ -125,6 +127,53 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
+    /// Checks the settings for an image of `width` x `height` pixels.
+    pub fn check(&self, width: u32, height: u32) -> Result<()> {
+        if self.spp == 0 {
+            return Err(Error::Invalid(
+                "samples per pixel must be at least 1".into(),
+            ));
+        }
+        if let Some(t) = self.time
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(Error::Invalid(format!(
+                "--time must be a positive number of seconds, got {t}"
+            )));
+        }
+        let (range, window) = self.job(width, height)?;
+        let job = range != (0, self.spp) || window != Window::full(width, height);
+        if job && (self.time.is_some() || self.reference.is_some()) {
+            return Err(Error::Invalid(
+                "a sample range or crop renders part of an image: it takes --spp, not --time or --reference".into(),
+            ));
+        }
+        let pixels = u64::from(width) * u64::from(height);
+        if let Some(r) = &self.reference
+            && r.len() as u64 != pixels
+        {
+            return Err(Error::Invalid(format!(
+                "the reference has {} pixels, the render {width}x{height} = {pixels}",
+                r.len()
+            )));
+        }
+        let it = &self.integrator;
+        if !(1..=64).contains(&it.light_samples) || !(1..=64).contains(&it.brdf_samples) {
+            return Err(Error::Invalid(format!(
+                "light and BRDF sample counts must be in 1..=64, got {} and {}",
+                it.light_samples, it.brdf_samples
+            )));
+        }
+        if let Some(c) = self.clamp
+            && !(c.is_finite() && c > 0.0)
+        {
+            return Err(Error::Invalid(format!(
+                "--clamp must be a positive finite luminance, got {c}"
+            )));
+        }
+        Ok(())
+    }
+
     /// The job's sample range and pixel window, checked against the image.
     pub fn job(&self, width: u32, height: u32) -> Result<((u32, u32), Window)> {
         let range = self.samples.unwrap_or((0, self.spp));
@@ -285,47 +334,60 @@ impl Renderer {
         seeds: &[u64],
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<Vec<RenderOutput>> {
-        let ctx = &self.ctx;
         let t0 = Instant::now();
-        if settings.spp == 0 {
-            return Err(Error::Invalid(
-                "samples per pixel must be at least 1".into(),
-            ));
-        }
-        if let Some(t) = settings.time
-            && !(t.is_finite() && t > 0.0)
-        {
-            return Err(Error::Invalid(format!(
-                "--time must be a positive number of seconds, got {t}"
-            )));
-        }
-        let (w, h) = (scene.camera.width, scene.camera.height);
-        let pixels = u64::from(w) * u64::from(h);
+        settings.check(scene.camera.width, scene.camera.height)?;
+        let prepared = self.prepare(scene, settings.trace)?;
+        self.render_prepared_from(&prepared, &scene.camera, settings, seeds, progress, t0)
+    }
+
+    /// Renders a prepared scene (see [`Renderer::prepare`]) through `camera` once per seed, as
+    /// [`Renderer::render_seeds`] would: nothing of the scene is uploaded or built again, only the
+    /// frame constants (camera, settings). The camera may move and change resolution; positions
+    /// stay relative to the camera the scene was prepared with, so it should stay near it (within
+    /// ~1e3 of the scene's size) to keep their precision.
+    pub fn render_prepared(
+        &self,
+        prepared: &PreparedScene,
+        camera: &crate::scene::Camera,
+        settings: &RenderSettings,
+        seeds: &[u64],
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<Vec<RenderOutput>> {
+        self.render_prepared_from(prepared, camera, settings, seeds, progress, Instant::now())
+    }
+
+    fn render_prepared_from(
+        &self,
+        prepared: &PreparedScene,
+        camera: &crate::scene::Camera,
+        settings: &RenderSettings,
+        seeds: &[u64],
+        progress: &mut dyn FnMut(u32, u32),
+        t0: Instant,
+    ) -> Result<Vec<RenderOutput>> {
+        let ctx = &self.ctx;
+        let (w, h) = (camera.width, camera.height);
+        settings.check(w, h)?;
         let (range, window) = settings.job(w, h)?;
-        let job = range != (0, settings.spp) || window != Window::full(w, h);
-        if job && (settings.time.is_some() || settings.reference.is_some()) {
-            return Err(Error::Invalid(
-                "a sample range or crop renders part of an image: it takes --spp, not --time or --reference".into(),
-            ));
-        }
-        if let Some(r) = &settings.reference
-            && r.len() as u64 != pixels
+        let pixels = u64::from(w) * u64::from(h);
+        let wanted = match settings.trace {
+            TraceMode::Auto => None,
+            TraceMode::RayQuery => Some("rayquery"),
+            TraceMode::Bvh => Some("bvh"),
+        };
+        if let Some(want) = wanted
+            && want != prepared.trace.name()
         {
             return Err(Error::Invalid(format!(
-                "the reference has {} pixels, the render {w}x{h} = {pixels}",
-                r.len()
+                "the scene was prepared for the {} trace path, the render asks for {want}",
+                prepared.trace.name()
             )));
         }
+        let (gpu, trace) = (&prepared.gpu, &prepared.trace);
+        let mut frame_constants = gpu.frame;
+        upload::set_camera(&mut frame_constants, camera, gpu.origin);
         let it = &settings.integrator;
-        if !(1..=64).contains(&it.light_samples) || !(1..=64).contains(&it.brdf_samples) {
-            return Err(Error::Invalid(format!(
-                "light and BRDF sample counts must be in 1..=64, got {} and {}",
-                it.light_samples, it.brdf_samples
-            )));
-        }
-        let mode = settings.trace.resolve(ctx)?;
-        let mut gpu = GpuScene::new(ctx, scene, mode == TraceMode::RayQuery)?;
-        gpu.frame.integrator = [
+        frame_constants.integrator = [
             match it.technique {
                 Technique::Brdf => TECHNIQUE_BRDF,
                 Technique::Light => TECHNIQUE_LIGHT,
@@ -339,22 +401,14 @@ impl Renderer {
                 0
             },
         ];
-        if let Some(c) = settings.clamp {
-            if !(c.is_finite() && c > 0.0) {
-                return Err(Error::Invalid(format!(
-                    "--clamp must be a positive finite luminance, got {c}"
-                )));
-            }
-            gpu.frame.film_params[0] = c;
-        }
-        gpu.frame.film_params[1] = f32::from_bits(settings.inject_non_finite);
-        let upload_seconds = t0.elapsed().as_secs_f64();
-        let trace = TraceStructure::build(ctx, &gpu, mode)?;
-        let build = trace.build_stats().clone();
+        frame_constants.film_params[0] = settings.clamp.unwrap_or(0.0);
+        frame_constants.film_params[1] = f32::from_bits(settings.inject_non_finite);
+        let upload_seconds = prepared.upload_seconds;
+        let build = prepared.build.clone();
 
         let frame = ctx.upload(
             "frame",
-            std::slice::from_ref(&gpu.frame),
+            std::slice::from_ref(&frame_constants),
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
         let film_buffer = ctx.create_buffer(
@@ -372,7 +426,7 @@ impl Renderer {
                     .cmd_fill_buffer(cmd, film_buffer.buffer, 0, vk::WHOLE_SIZE, 0)
             }
         })?;
-        let kernel = PrimaryKernel::new(ctx, &gpu, &trace, &frame, &film_buffer)?;
+        let kernel = PrimaryKernel::new(ctx, gpu, trace, &frame, &film_buffer)?;
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
 

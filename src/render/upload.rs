@@ -122,6 +122,22 @@ fn shape_aabb(s: &GpuShape) -> [f32; 6] {
     [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]
 }
 
+/// Writes `cam` into the frame constants of a scene uploaded relative to `origin` (in double
+/// precision: the camera may have moved since the upload).
+pub fn set_camera(frame: &mut Frame, cam: &crate::scene::Camera, origin: DVec3) {
+    let forward = (cam.look_at - cam.position).normalize();
+    let right_dir = forward.cross(cam.up).normalize();
+    let up_dir = right_dir.cross(forward);
+    let tan_half = (cam.fov_y_deg.to_radians() * 0.5).tan();
+    let aspect = f64::from(cam.width) / f64::from(cam.height);
+    frame.cam_forward = v4(forward, 0.0);
+    frame.cam_right = v4(right_dir * tan_half * aspect, 0.0);
+    frame.cam_up = v4(up_dir * tan_half, 0.0);
+    frame.cam_origin = v4(cam.position - origin, 0.0);
+    frame.size[0] = cam.width;
+    frame.size[1] = cam.height;
+}
+
 impl GpuScene {
     pub fn new(ctx: &Context, scene: &Scene, ray_query: bool) -> Result<GpuScene> {
         let origin = scene.camera.position;
@@ -510,23 +526,9 @@ impl GpuScene {
                 Some(ctx.upload("dome sampling", std::slice::from_ref(&gpu), storage)?);
             dome_table = Some(data);
         }
-        let cam = &scene.camera;
-        let forward = (cam.look_at - cam.position).normalize();
-        let right_dir = forward.cross(cam.up).normalize();
-        let up_dir = right_dir.cross(forward);
-        let tan_half = (cam.fov_y_deg.to_radians() * 0.5).tan();
-        let aspect = f64::from(cam.width) / f64::from(cam.height);
         let addr = |b: &Option<Buffer>| b.as_ref().map_or(0, |b| b.address);
-        let frame = Frame {
-            cam_forward: v4(forward, 0.0),
-            cam_right: v4(right_dir * tan_half * aspect, 0.0),
-            cam_up: v4(up_dir * tan_half, 0.0),
-            size: [
-                cam.width,
-                cam.height,
-                lights.len() as u32,
-                shapes.len() as u32,
-            ],
+        let mut frame = Frame {
+            size: [0, 0, lights.len() as u32, shapes.len() as u32],
             counts: [
                 gpu_instances.len() as u32,
                 materials.len() as u32,
@@ -554,7 +556,9 @@ impl GpuScene {
             ],
             // Set by the renderer from its settings.
             film_params: [0.0; 4],
+            ..Default::default()
         };
+        set_camera(&mut frame, &scene.camera, origin);
         Ok(GpuScene {
             frame,
             features,

@@ -68,6 +68,10 @@ pub struct Inner {
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     messages: Arc<Mutex<Vec<String>>>,
     kernel_listener: Mutex<Option<KernelListener>>,
+    /// Buffers uploaded through [`Context::upload`] and their bytes, for callers that check what
+    /// a render re-uploads (a prepared scene's second render uploads only its frame constants).
+    pub(crate) uploads: std::sync::atomic::AtomicU64,
+    pub(crate) uploaded_bytes: std::sync::atomic::AtomicU64,
     owned: bool,
 }
 
@@ -535,6 +539,8 @@ impl Context {
                 debug,
                 messages,
                 kernel_listener: Mutex::new(None),
+                uploads: Default::default(),
+                uploaded_bytes: Default::default(),
                 owned,
             })))
         }

@@ -151,6 +151,10 @@ impl Context {
         usage: vk::BufferUsageFlags,
     ) -> Result<Buffer> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
+        self.uploads
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.uploaded_bytes
+            .fetch_add(bytes.len() as u64, std::sync::atomic::Ordering::Relaxed);
         let dst = self.create_buffer(
             name,
             bytes.len() as u64,
@@ -183,6 +187,15 @@ impl Context {
             }
         })?;
         Ok(dst)
+    }
+
+    /// Buffers uploaded so far through [`Context::upload`], and their bytes.
+    pub fn upload_counts(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        (
+            self.uploads.load(Relaxed),
+            self.uploaded_bytes.load(Relaxed),
+        )
     }
 
     /// Reads `count` elements of `buf` back to the host.
