@@ -17,6 +17,7 @@ pub mod error;
 pub mod vk;
 
 pub use error::{Error, Result};
+pub mod gpu_scene;
 pub mod metrics;
 pub mod render;
 pub mod report;

@@ -7,8 +7,8 @@
 mod sampling_support;
 
 use glam::{DVec2, DVec3, Vec3, Vec4};
+use illum::gpu_scene::dome;
 use illum::layout::*;
-use illum::render::dome;
 use illum::scene::{DomeConvention, dome_map};
 use illum::stress::closed_form::{polygon_irradiance, sphere_irradiance};
 use sampling_support::*;

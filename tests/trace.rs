@@ -10,8 +10,9 @@ mod reference;
 
 use common::{assert_no_validation_messages, context};
 use glam::{DMat4, DQuat, DVec3, Vec3};
+use illum::gpu_scene::GpuScene;
 use illum::layout::*;
-use illum::render::{GpuScene, RenderSettings, Renderer};
+use illum::render::{RenderSettings, Renderer};
 use illum::scene::*;
 use illum::trace::bench::{camera_rays, displaced_sphere};
 use illum::trace::query::{HitRecord, Ray, trace_rays};

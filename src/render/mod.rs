@@ -6,19 +6,16 @@
 //! compared with a reference (RMSE, relMSE, MAE) or, without one, its relMSE is estimated from the
 //! even and odd half-buffers (see [`crate::metrics`]).
 
-pub mod dome;
+mod direct;
 pub mod film;
+pub mod integrator;
 pub mod job;
-mod lights;
 mod prepared;
-mod primary;
 mod probe;
-mod upload;
 
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
-pub use upload::GpuScene;
 
 use crate::error::{Error, Result};
 use crate::layout::*;
@@ -28,7 +25,6 @@ use crate::trace::BuildStats;
 use crate::trace::TraceMode;
 use crate::vk::{Context, GpuTimer, MemoryLocation};
 use ash::vk;
-use primary::PrimaryKernel;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -385,22 +381,9 @@ impl Renderer {
         }
         let (gpu, trace) = (&prepared.gpu, &prepared.trace);
         let mut frame_constants = gpu.frame;
-        upload::set_camera(&mut frame_constants, camera, gpu.origin);
-        let it = &settings.integrator;
-        frame_constants.integrator = [
-            match it.technique {
-                Technique::Brdf => TECHNIQUE_BRDF,
-                Technique::Light => TECHNIQUE_LIGHT,
-                Technique::Mis => TECHNIQUE_MIS,
-            },
-            it.light_samples,
-            it.brdf_samples,
-            if it.diffuse_mis {
-                INTEGRATOR_DIFFUSE_MIS
-            } else {
-                0
-            },
-        ];
+        crate::gpu_scene::set_camera(&mut frame_constants, camera, gpu.origin);
+        let integrator = integrator::select(settings);
+        integrator.configure(&mut frame_constants);
         frame_constants.film_params[0] = settings.clamp.unwrap_or(0.0);
         frame_constants.film_params[1] = f32::from_bits(settings.inject_non_finite);
         let upload_seconds = prepared.upload_seconds;
@@ -426,7 +409,7 @@ impl Renderer {
                     .cmd_fill_buffer(cmd, film_buffer.buffer, 0, vk::WHOLE_SIZE, 0)
             }
         })?;
-        let kernel = PrimaryKernel::new(ctx, gpu, trace, &frame, &film_buffer)?;
+        let kernel = integrator.kernels(ctx, prepared, &frame, &film_buffer)?;
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
 

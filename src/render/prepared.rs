@@ -2,8 +2,8 @@
 //! any number of renders (other settings, seeds, sample ranges, a moved camera).
 
 use super::Renderer;
-use super::upload::GpuScene;
 use crate::error::Result;
+use crate::gpu_scene::GpuScene;
 use crate::scene::{Camera, Scene};
 use crate::trace::{BuildStats, TraceMode, TraceStructure};
 use std::time::Instant;

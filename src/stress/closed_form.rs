@@ -459,7 +459,7 @@ pub fn dome_irradiance_quadrature(
         0.171_324_492_379_170_3,
     ];
     const SPLIT: u32 = 4;
-    let (cw, ch) = crate::render::dome::cells(convention, t.width, t.height);
+    let (cw, ch) = crate::gpu_scene::dome::cells(convention, t.width, t.height);
     let offset = if convention == DomeConvention::Mitsuba {
         0.5 / f64::from(t.width)
     } else {

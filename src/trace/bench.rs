@@ -2,8 +2,8 @@
 //! time and memory of each structure. Also the procedural meshes themselves, which the tests use.
 
 use crate::error::Result;
+use crate::gpu_scene::GpuScene;
 use crate::layout::*;
-use crate::render::GpuScene;
 use crate::scene::{Camera, Material, Mesh, MeshInstance, Scene};
 use crate::trace::query::{HitRecord, QueryKernel, Ray};
 use crate::trace::{BuildStats, TraceMode, TraceStructure};

@@ -7,8 +7,8 @@ pub mod query;
 pub mod rayquery;
 
 use crate::error::Result;
+use crate::gpu_scene::GpuScene;
 use crate::layout::*;
-use crate::render::GpuScene;
 use crate::vk::{ComputePipeline, Context};
 use ash::vk;
 use rayquery::{AabbGeometry, BlasInput, RayQueryScene, TlasInstance, TriangleGeometry};

@@ -2,8 +2,8 @@
 //! tests (both trace paths must agree) and for `illum bench trace`.
 
 use crate::error::Result;
+use crate::gpu_scene::GpuScene;
 use crate::layout::*;
-use crate::render::GpuScene;
 use crate::shaders;
 use crate::trace::TraceStructure;
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};

@@ -3,8 +3,8 @@
 //! Hits close to a triangle edge, a shape's rim, the ends of the t range, or at grazing incidence
 //! are "marginal": either answer is right for them.
 
+use illum::gpu_scene::GpuScene;
 use illum::layout::*;
-use illum::render::GpuScene;
 use illum::trace::query::{HitRecord, Ray};
 
 #[derive(Clone, Copy, Debug)]

@@ -43,8 +43,8 @@ pub mod nodes;
 
 use super::BuildStats;
 use crate::error::{Error, Result};
+use crate::gpu_scene::GpuScene;
 use crate::layout::*;
-use crate::render::GpuScene;
 use crate::vk::{Buffer, Context};
 use ash::vk;
 use builder::{Aabb, BuildParams};

@@ -1,5 +1,10 @@
-//! Scene → GPU buffers. Positions become camera-relative here, in double precision, before the
+//! Scene → GPU buffers: the uploaded scene that the trace structures (src/trace) are built over
+//! and the integrators (src/render) read. Below both: nothing here imports either.
+//! Positions become camera-relative here, in double precision, before the
 //! conversion to f32: a scene 1e5 units from the origin keeps the precision of one at the origin.
+
+pub mod dome;
+mod lights;
 
 use crate::error::Result;
 use crate::layout::*;
@@ -509,7 +514,7 @@ impl GpuScene {
         let texel_buffer = upload(ctx, "texels", &texels, storage)?;
 
         // The light BVH that BRDF samples traverse to find the lights they cross.
-        let light_bvh = super::lights::build(&lights);
+        let light_bvh = lights::build(&lights);
         let light_node_buffer = upload(ctx, "light BVH nodes", &light_bvh.nodes, storage)?;
         let light_ref_buffer = upload(ctx, "light BVH references", &light_bvh.refs, storage)?;
         // Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
@@ -519,7 +524,7 @@ impl GpuScene {
             && let Some(t) = scene.lights[dome_map.0].texture
         {
             let tint = scene.lights[dome_map.0].radiance();
-            let table = super::dome::build(&scene.textures[t as usize], tint, dome_map.1);
+            let table = dome::build(&scene.textures[t as usize], tint, dome_map.1);
             let data = ctx.upload("dome CDFs", &table.data(), storage)?;
             let gpu = table.gpu(data.address);
             dome_sampling =

@@ -1,0 +1,38 @@
+//! The seam between the driver (src/render/mod.rs: budget, passes, tiles, film blocks, progress,
+//! cancel, evaluation) and the integrators, which turn camera samples into film sums. The driver
+//! knows no integrator: it asks [`select`] for the one the settings name, lets it write its frame
+//! constants and create its kernels, and has it record each dispatch. Adding an integrator is its
+//! own module plus one line in [`select`].
+
+use super::{PreparedScene, RenderSettings};
+use crate::error::Result;
+use crate::layout::{Frame, PassConstants};
+use crate::vk::{Buffer, Context};
+use ash::vk;
+
+pub trait Integrator {
+    /// Its name, for messages and headers.
+    fn name(&self) -> &'static str;
+    /// Writes its settings into the frame constants.
+    fn configure(&self, frame: &mut Frame);
+    /// Creates its kernels for `scene`, bound to the frame constants and the film.
+    fn kernels(
+        &self,
+        ctx: &Context,
+        scene: &PreparedScene,
+        frame: &Buffer,
+        film: &Buffer,
+    ) -> Result<Box<dyn IntegratorPasses>>;
+}
+
+/// An integrator's kernels for one render.
+pub trait IntegratorPasses {
+    /// Records what adds samples [first_sample, first_sample + sample_count) of the pixels in
+    /// `pass.tile` to the film (dispatches and the barriers between them).
+    fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants);
+}
+
+/// The integrator `settings` ask for.
+pub fn select(settings: &RenderSettings) -> Box<dyn Integrator> {
+    Box::new(super::direct::Direct(settings.integrator))
+}
