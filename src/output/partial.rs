@@ -2,7 +2,7 @@
 //! exact film sums so that `illum merge` can rebuild the image bit for bit (src/render/film.rs).
 //!
 //! The data window is the job's pixel window. Channels (all sorted by name, as EXR wants):
-//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128, unit 2^-40) of each of the 24
+//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128; units in src/render/film.rs) of each of the 24
 //!   film channels [`PLANES`], as four little-endian 32-bit words (UINT channels, w0 lowest);
 //! - `block<k>.<plane>` (k = 0, 1): float32 sums of a whole film block that the job owns only
 //!   partly, with its sample range in the header attribute `illum.block<k>` = "start..end".

@@ -6,11 +6,12 @@
 //!   [256 k, min(256 (k + 1), N)) of an N-sample render, counted from sample 0 whatever the job,
 //!   each dispatch taking them in index order. float32 sums of a block never depend on how the
 //!   render was split, so long as the whole block was rendered.
-//! - At each block's end its sums leave the device and are added here in fixed point (i128 with
-//!   a unit of 2^-40): integer addition is associative, so the total does not depend on the
-//!   order in which blocks or jobs are added. The unit resolves 9e-13 and the range reaches 1.5e26
-//!   (squared radiance of 1e8 over 2^30 samples); each block sum is rounded to it once,
-//!   deterministically.
+//! - At each block's end its sums leave the device and are added here in fixed point (i128):
+//!   integer addition is associative, so the total does not depend on the order in which blocks
+//!   or jobs are added. The unit is 2^-64 (every float32 from 5e-13 up is exact in it; the range
+//!   reaches 9e18, radiance 1e8 over 2^36 samples), and 2^-24 for the sums of squares (range
+//!   1e31: squared radiance 1e8 over 2^46 samples). Each block sum is rounded to it once,
+//!   deterministically; sums saturate rather than wrap.
 //! - A job whose sample range starts or ends inside a block renders that whole block (so that its
 //!   float32 sums are the ones a render in one piece makes) and keeps it apart as a
 //!   [`BoundaryBlock`]; merging takes each boundary block once, from whichever job has it.
@@ -24,18 +25,21 @@ use crate::vk::{Buffer, Context};
 pub const FILM_BLOCK: u32 = 256;
 /// Floats per pixel in the device film (FilmPixel).
 pub const FILM_CHANNELS: usize = 24;
-/// Fixed-point unit of the exact sums: 2^-FIXED_BITS.
-const FIXED_BITS: i32 = 40;
+/// Fixed-point unit of channel c's exact sums: 2^-fixed_bits(c) (the squares, FilmPixel's
+/// beauty_sq.rgb, get a coarser unit for their range).
+pub fn fixed_bits(c: usize) -> i32 {
+    if (4..7).contains(&c) { 24 } else { 64 }
+}
 
-/// A float32 block sum in fixed point (NaN reads 0; out of range saturates).
-pub fn to_fixed(v: f32) -> i128 {
-    let x = (f64::from(v) * 2f64.powi(FIXED_BITS)).round();
+/// A float32 block sum of channel `c` in fixed point (NaN reads 0; out of range saturates).
+pub fn to_fixed(v: f32, c: usize) -> i128 {
+    let x = (f64::from(v) * 2f64.powi(fixed_bits(c))).round();
     if x.is_nan() { 0 } else { x as i128 }
 }
 
-/// A fixed-point sum as f64.
-pub fn from_fixed(s: i128) -> f64 {
-    s as f64 * 2f64.powi(-FIXED_BITS)
+/// A fixed-point sum of channel `c` as f64.
+pub fn from_fixed(s: i128, c: usize) -> f64 {
+    s as f64 * 2f64.powi(-fixed_bits(c))
 }
 
 /// The block of sample `s` in an `n`-sample render: [start, end).
@@ -112,8 +116,8 @@ impl FilmSums {
     /// Adds float32 block sums (window pixels) exactly.
     pub fn add_block(&mut self, block: &[[f32; FILM_CHANNELS]]) {
         for (acc, p) in self.sums.iter_mut().zip(block) {
-            for (a, x) in acc.iter_mut().zip(p) {
-                *a += to_fixed(*x);
+            for (c, (a, x)) in acc.iter_mut().zip(p).enumerate() {
+                *a = a.saturating_add(to_fixed(*x, c));
             }
         }
     }
@@ -122,7 +126,7 @@ impl FilmSums {
     pub fn add_sums(&mut self, other: &[[i128; FILM_CHANNELS]]) {
         for (acc, p) in self.sums.iter_mut().zip(other) {
             for (a, x) in acc.iter_mut().zip(p) {
-                *a += x;
+                *a = a.saturating_add(*x);
             }
         }
     }
@@ -203,7 +207,7 @@ pub fn resolve(sums: &[[i128; FILM_CHANNELS]], width: u32, height: u32, spp: u32
     const EMISSION: usize = 16;
     const BEAUTY_ODD: usize = 20;
     for (i, s) in sums.iter().enumerate() {
-        let p: [f64; FILM_CHANNELS] = std::array::from_fn(|k| from_fixed(s[k]));
+        let p: [f64; FILM_CHANNELS] = std::array::from_fn(|k| from_fixed(s[k], k));
         for c in 0..3 {
             let sum = p[BEAUTY + c];
             let mean = sum / n;
@@ -248,17 +252,16 @@ mod tests {
 
     #[test]
     fn fixed_point_is_exact_for_float32_sums_and_associative() {
-        for v in [0.0f32, 1.0, -2.5, 1e-3, 3.0e7, 1.1754944e-38, 1e16] {
-            let f = to_fixed(v);
-            if v.abs() >= 2f32.powi(-16) {
-                assert_eq!(from_fixed(f), f64::from(v), "{v}");
-            }
+        // Every float32 from 2^-41 up is exact in the unit of 2^-64.
+        for v in [0.0f32, 1.0, -2.5, 1e-3, 3.0e7, 4.6e-13, 1e16, 1e18] {
+            assert_eq!(from_fixed(to_fixed(v, 0), 0), f64::from(v), "{v}");
         }
+        assert_eq!(from_fixed(to_fixed(1e30, 5), 5), 1e30f32 as f64);
         let xs = [0.1f32, 1e6, 3.3e-5, 7.0, 1e-9, 2.5e12];
-        let a: i128 = xs.iter().map(|&x| to_fixed(x)).sum();
-        let b: i128 = xs.iter().rev().map(|&x| to_fixed(x)).sum();
+        let a: i128 = xs.iter().map(|&x| to_fixed(x, 0)).sum();
+        let b: i128 = xs.iter().rev().map(|&x| to_fixed(x, 0)).sum();
         assert_eq!(a, b);
-        assert_eq!(to_fixed(f32::NAN), 0);
+        assert_eq!(to_fixed(f32::NAN, 0), 0);
     }
 
     #[test]

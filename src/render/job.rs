@@ -250,7 +250,7 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
         for (i, s) in p.sums.sums.iter().enumerate() {
             let acc = &mut sums[frame_index(&p.info.window, i)];
             for (a, x) in acc.iter_mut().zip(s) {
-                *a += x;
+                *a = a.saturating_add(*x);
             }
         }
     }
@@ -276,8 +276,8 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
                     continue;
                 }
                 seen[at].push((b.start, pi, bi, i));
-                for (a, x) in sums[at].iter_mut().zip(v) {
-                    *a += film::to_fixed(*x);
+                for (c, (a, x)) in sums[at].iter_mut().zip(v).enumerate() {
+                    *a = a.saturating_add(film::to_fixed(*x, c));
                 }
             }
         }
