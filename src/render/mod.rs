@@ -12,10 +12,12 @@ pub mod integrator;
 pub mod job;
 mod prepared;
 mod probe;
+mod settings;
 
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
+pub use settings::{IntegratorSettings, RenderSettings, Technique};
 
 use crate::error::{Error, Result};
 use crate::layout::*;
@@ -25,193 +27,9 @@ use crate::trace::BuildStats;
 use crate::trace::TraceMode;
 use crate::vk::{Context, GpuTimer, MemoryLocation};
 use ash::vk;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+
+use std::sync::atomic::Ordering;
 use std::time::Instant;
-
-/// How direct lighting is estimated (TECHNIQUES.md §3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Technique {
-    /// BRDF sampling only: lights are found by the BRDF samples that hit them.
-    Brdf,
-    /// Light sampling only (delta lobes then see no light).
-    Light,
-    /// Both, combined by multiple importance sampling with the power heuristic.
-    #[default]
-    Mis,
-}
-
-impl Technique {
-    pub fn name(self) -> &'static str {
-        match self {
-            Technique::Brdf => "brdf",
-            Technique::Light => "light",
-            Technique::Mis => "mis",
-        }
-    }
-}
-
-impl std::str::FromStr for Technique {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        match s {
-            "brdf" => Ok(Technique::Brdf),
-            "light" => Ok(Technique::Light),
-            "mis" => Ok(Technique::Mis),
-            _ => Err(format!(
-                "unknown technique {s:?} (expected brdf, light or mis)"
-            )),
-        }
-    }
-}
-
-/// Sample counts and switches of the direct-lighting integrator.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct IntegratorSettings {
-    pub technique: Technique,
-    /// Most light samples per light and camera sample; each light takes
-    /// ceil(its solid-angle share of the hemisphere × this), at least 1 (the course's rule).
-    pub light_samples: u32,
-    /// BRDF samples per specular lobe (and for the diffuse lobe under BRDF sampling or diffuse MIS).
-    pub brdf_samples: u32,
-    /// Diffuse also by MIS with cosine-sampled BRDF samples (the course: light samples only).
-    pub diffuse_mis: bool,
-}
-
-impl Default for IntegratorSettings {
-    fn default() -> Self {
-        IntegratorSettings {
-            technique: Technique::Mis,
-            light_samples: 4,
-            brdf_samples: 2,
-            diffuse_mis: false,
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-pub struct RenderSettings {
-    pub integrator: IntegratorSettings,
-    /// Samples per pixel: the budget, or the cap when `time` is set.
-    pub spp: u32,
-    /// Time budget in seconds of rendering (wall clock, evaluation excluded); None: `spp` only.
-    pub time: Option<f64>,
-    pub seed: u64,
-    pub trace: TraceMode,
-    /// Upper bound on camera samples (pixels × samples) in one submission, so that no dispatch
-    /// runs long enough to trip a desktop driver's watchdog.
-    pub samples_per_submit: u64,
-    /// Reference image (row-major RGB, the camera's resolution) to measure each pass against.
-    pub reference: Option<Vec<[f32; 3]>>,
-    /// Read the film back after every pass and evaluate it (implied by `reference`).
-    pub evaluate_passes: bool,
-    /// Firefly clamp: the most luminance one camera sample's direct lighting may have (scaled
-    /// down, hue kept, above it). None: off, the default. It biases the image (TECHNIQUES 7.6).
-    pub clamp: Option<f32>,
-    /// Set it (from another thread or a signal handler) to stop the render after the current
-    /// round of dispatches: the output then holds the samples done so far (at least one per
-    /// pixel) and says [`RenderStats::interrupted`].
-    pub cancel: Option<Arc<AtomicBool>>,
-    /// Test hook: make every n-th sample of each pixel NaN (0: off), to check that non-finite
-    /// samples are counted and kept out of the image.
-    #[doc(hidden)]
-    pub inject_non_finite: u32,
-    /// Render only samples [A, B) of the `spp`-sample image (a job of a split render; film.rs).
-    pub samples: Option<(u32, u32)>,
-    /// Render only this pixel window.
-    pub crop: Option<Window>,
-}
-
-impl RenderSettings {
-    /// Checks the settings for an image of `width` x `height` pixels.
-    pub fn check(&self, width: u32, height: u32) -> Result<()> {
-        if self.spp == 0 {
-            return Err(Error::Invalid(
-                "samples per pixel must be at least 1".into(),
-            ));
-        }
-        if let Some(t) = self.time
-            && !(t.is_finite() && t > 0.0)
-        {
-            return Err(Error::Invalid(format!(
-                "--time must be a positive number of seconds, got {t}"
-            )));
-        }
-        let (range, window) = self.job(width, height)?;
-        let job = range != (0, self.spp) || window != Window::full(width, height);
-        if job && (self.time.is_some() || self.reference.is_some()) {
-            return Err(Error::Invalid(
-                "a sample range or crop renders part of an image: it takes --spp, not --time or --reference".into(),
-            ));
-        }
-        let pixels = u64::from(width) * u64::from(height);
-        if let Some(r) = &self.reference
-            && r.len() as u64 != pixels
-        {
-            return Err(Error::Invalid(format!(
-                "the reference has {} pixels, the render {width}x{height} = {pixels}",
-                r.len()
-            )));
-        }
-        let it = &self.integrator;
-        if !(1..=64).contains(&it.light_samples) || !(1..=64).contains(&it.brdf_samples) {
-            return Err(Error::Invalid(format!(
-                "light and BRDF sample counts must be in 1..=64, got {} and {}",
-                it.light_samples, it.brdf_samples
-            )));
-        }
-        if let Some(c) = self.clamp
-            && !(c.is_finite() && c > 0.0)
-        {
-            return Err(Error::Invalid(format!(
-                "--clamp must be a positive finite luminance, got {c}"
-            )));
-        }
-        Ok(())
-    }
-
-    /// The job's sample range and pixel window, checked against the image.
-    pub fn job(&self, width: u32, height: u32) -> Result<((u32, u32), Window)> {
-        let range = self.samples.unwrap_or((0, self.spp));
-        if !(range.0 < range.1 && range.1 <= self.spp) {
-            return Err(Error::Invalid(format!(
-                "sample range {}..{} must be non-empty and within 0..{} (the image's spp)",
-                range.0, range.1, self.spp
-            )));
-        }
-        let window = self.crop.unwrap_or(Window::full(width, height));
-        if !(window.x0 < window.x1
-            && window.y0 < window.y1
-            && window.x1 <= width
-            && window.y1 <= height)
-        {
-            return Err(Error::Invalid(format!(
-                "crop {window} must be a non-empty window within the {width}x{height} image"
-            )));
-        }
-        Ok((range, window))
-    }
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        RenderSettings {
-            integrator: IntegratorSettings::default(),
-            spp: 16,
-            time: None,
-            seed: 0,
-            trace: TraceMode::Auto,
-            samples_per_submit: 1 << 20,
-            reference: None,
-            evaluate_passes: false,
-            clamp: None,
-            cancel: None,
-            inject_non_finite: 0,
-            samples: None,
-            crop: None,
-        }
-    }
-}
 
 /// One row of the error-against-time report. Times and samples are cumulative.
 #[derive(Clone, Debug, Default)]
