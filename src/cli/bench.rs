@@ -1,4 +1,5 @@
 //! `illum bench trace`: trace throughput, build time and memory of both trace paths.
+//! `illum bench prepared`: what rendering a prepared scene again saves over a fresh render.
 
 use crate::trace::TraceMode;
 use crate::trace::bench;
@@ -11,6 +12,27 @@ pub enum BenchCommand {
     /// Ray throughput, build time and memory of the trace paths (ray queries, compute BVH) on
     /// procedurally generated meshes.
     Trace(BenchTraceArgs),
+    /// Wall time of a fresh render against a render of the same scene already prepared (uploaded
+    /// and built), and the bytes each uploads.
+    Prepared(BenchPreparedArgs),
+}
+
+#[derive(clap::Args)]
+pub struct BenchPreparedArgs {
+    #[command(flatten)]
+    pub scene: super::SceneArgs,
+    /// Samples per pixel of each render.
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
+    /// Renders of each kind; the best time is printed.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    /// Trace path: auto, rayquery or bvh.
+    #[arg(long, default_value = "auto")]
+    pub trace: TraceMode,
+    /// Device index or a substring of its name (see `illum devices`).
+    #[arg(long)]
+    pub device: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -38,7 +60,65 @@ pub struct BenchTraceArgs {
 pub fn run(command: &BenchCommand) -> Result<()> {
     match command {
         BenchCommand::Trace(a) => trace(a),
+        BenchCommand::Prepared(a) => prepared(a),
     }
+}
+
+fn prepared(a: &BenchPreparedArgs) -> Result<()> {
+    use crate::render::{RenderSettings, Renderer};
+    use std::time::Instant;
+    let scene = a.scene.load()?;
+    let ctx = Context::new(&ContextOptions {
+        device: a.device.clone(),
+        validation: false,
+    })?;
+    let r = Renderer::new(ctx.clone());
+    let settings = RenderSettings {
+        spp: a.spp,
+        trace: a.trace,
+        ..Default::default()
+    };
+    // Warm the driver's caches (kernel compilation) and the loop probe first.
+    r.render(&scene, &settings, &mut |_, _| {})?;
+    let measure = |f: &mut dyn FnMut() -> crate::Result<()>| -> Result<(f64, u64)> {
+        let mut best = (f64::INFINITY, 0);
+        for _ in 0..a.repeat.max(1) {
+            let (_, b0) = ctx.upload_counts();
+            let t = Instant::now();
+            f()?;
+            let dt = t.elapsed().as_secs_f64();
+            let (_, b1) = ctx.upload_counts();
+            if dt < best.0 {
+                best = (dt, b1 - b0);
+            }
+        }
+        Ok(best)
+    };
+    let fresh = measure(&mut || r.render(&scene, &settings, &mut |_, _| {}).map(|_| ()))?;
+    let t = Instant::now();
+    let prepared = r.prepare(&scene, a.trace)?;
+    let prepare_seconds = t.elapsed().as_secs_f64();
+    let again = measure(&mut || {
+        r.render_prepared(&prepared, &scene.camera, &settings, &[0], &mut |_, _| {})
+            .map(|_| ())
+    })?;
+    println!(
+        "{} {}x{} at {} spp on {} via {}: fresh render {:.3} s ({} bytes uploaded); prepare {:.3} s; \
+         render of the prepared scene {:.3} s ({} bytes uploaded): {:.3} s saved per render",
+        a.scene.name(),
+        scene.camera.width,
+        scene.camera.height,
+        a.spp,
+        ctx.info().name,
+        prepared.trace_name(),
+        fresh.0,
+        fresh.1,
+        prepare_seconds,
+        again.0,
+        again.1,
+        fresh.0 - again.0
+    );
+    Ok(())
 }
 
 fn trace(a: &BenchTraceArgs) -> Result<()> {
