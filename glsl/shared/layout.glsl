@@ -1,8 +1,13 @@
-// The layout contract between Rust (src/layout.rs) and every kernel: structs, bindings, constants.
-// `#define NAME <integer>` lines are turned into Rust constants by build.rs; the structs are mirrored
-// by #[repr(C)] types in src/layout.rs, and tests/layout.rs checks every size and offset against the
-// offsets glslang emits for glsl/tests/layout_check.comp. Scalar block layout everywhere; fields are
-// ordered so that std430 would give the same offsets.
+// The layout contract between Rust and every kernel: structs, bindings, constants, written once
+// here. build.rs generates the Rust side from this file (src/layout.rs includes it): every
+// `#define NAME <integer>` becomes a `u32` constant, every struct a #[repr(C)] Pod mirror with the
+// same member names and order, documented by the comments here. For the generator, write
+// `struct Name {` on one line and one member per line (`type name;` or `type name[N];`); the `//`
+// lines right above a struct document it, a member's trailing comment (and comment lines directly
+// below it) document that member. Scalar block layout everywhere; members are ordered so that std430
+// would give the same offsets. tests/layout.rs checks every size and offset
+// against the offsets glslang emits for glsl/tests/layout_check.comp, and that this header, that
+// kernel and the Rust mirrors name the same structs.
 #ifndef ILLUM_LAYOUT_GLSL
 #define ILLUM_LAYOUT_GLSL
 
