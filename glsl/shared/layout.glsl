@@ -97,12 +97,12 @@
 #define MASK_LIGHT_SHADOWS 4
 #define MASK_OCCLUDERS 5
 
-// Direct-lighting techniques (Frame.integrator.x): BRDF sampling only, light sampling only, or
+// Direct-lighting techniques (Frame.technique): BRDF sampling only, light sampling only, or
 // both combined by multiple importance sampling (the power heuristic).
 #define TECHNIQUE_BRDF 0
 #define TECHNIQUE_LIGHT 1
 #define TECHNIQUE_MIS 2
-// Frame.integrator.w: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
+// Frame.integrator_flags: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
 // course lights diffuse with light samples only).
 #define INTEGRATOR_DIFFUSE_MIS 1
 
@@ -134,10 +134,18 @@ struct Frame {
     vec4 cam_origin;      // xyz: the camera's position relative to the scene's upload origin (the
                           // camera it was prepared with: 0 unless a prepared scene renders a
                           // moved camera)
-    uvec4 size;           // width, height, light count, shape count
-    uvec4 counts;         // instance count, material count, texture count, dome light index or NONE
-    uvec4 integrator;     // technique (TECHNIQUE_*), most light samples per light, BRDF samples per
-                          // lobe, flags (INTEGRATOR_*)
+    uint width;           // image size in pixels
+    uint height;
+    uint light_count;     // GpuLight entries
+    uint shape_count;     // GpuShape entries
+    uint instance_count;  // GpuInstance entries
+    uint material_count;  // GpuMaterial entries
+    uint texture_count;   // GpuTexture entries
+    uint dome_light;      // GpuLight index of the dome, or NONE
+    uint technique;       // direct lighting: TECHNIQUE_*
+    uint light_samples;   // most light samples per light
+    uint brdf_samples;    // BRDF samples per lobe
+    uint integrator_flags;    // INTEGRATOR_*
     uint64_t instances;   // device addresses of the scene buffers (0 when absent)
     uint64_t vertices;
     uint64_t indices;
@@ -149,10 +157,15 @@ struct Frame {
     uint64_t dome_sampling;   // GpuDomeSampling of the dome's map (0: none; uniform sampling)
     uint64_t light_nodes;     // GpuLightNode array: BVH over the finite lights' bounds
     uint64_t light_refs;      // uint array: light indices in leaf order, then the infinite lights
-    uvec4 light_bvh;          // node count, first infinite ref, infinite light count, unused
-    vec4 film_params;         // x: firefly clamp, the most luminance of one camera sample's direct
-                              // lighting (0: off; biased when on); y: bits of a uint n, test hook:
-                              // every n-th sample is NaN (0: off); zw unused
+    uint light_bvh_nodes;     // GpuLightNode count (0: no finite light)
+    uint infinite_first;      // light_refs index of the first infinite light
+    uint infinite_count;      // infinite lights (dome, sun), at light_refs[infinite_first ...]
+    uint pad0;
+    float clamp_luminance;    // firefly clamp: the most luminance of one camera sample's direct
+                              // lighting (0: off; biased when on)
+    uint nan_every;           // test hook: every n-th sample is NaN (0: off)
+    uint pad1;
+    uint pad2;
 };
 
 // Per-dispatch constants.
@@ -220,8 +233,9 @@ struct GpuMaterial {
 struct GpuLight {
     vec4 p0;   // rect: centre; disk/sphere: centre, radius; dome: cos, sin of rotation; sun: direction, cos(theta_max)
                // triangle: vertex 0 (camera-relative world)
-    vec4 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
-               // triangle: edge v1 - v0; w = triangle index within its mesh (uint bits)
+    vec3 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
+               // triangle: edge v1 - v0
+    uint triangle;   // LIGHT_TRIANGLE: the triangle's index within its mesh (0 otherwise)
     vec4 p2;   // rect: full edge v; disk: unit tangent; triangle: edge v2 - v0 (normal: normalize(p1 x p2))
     vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence;
                      // emissive geometry: the material's emission)

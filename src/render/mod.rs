@@ -387,22 +387,20 @@ impl Renderer {
         let mut frame_constants = gpu.frame;
         upload::set_camera(&mut frame_constants, camera, gpu.origin);
         let it = &settings.integrator;
-        frame_constants.integrator = [
-            match it.technique {
-                Technique::Brdf => TECHNIQUE_BRDF,
-                Technique::Light => TECHNIQUE_LIGHT,
-                Technique::Mis => TECHNIQUE_MIS,
-            },
-            it.light_samples,
-            it.brdf_samples,
-            if it.diffuse_mis {
-                INTEGRATOR_DIFFUSE_MIS
-            } else {
-                0
-            },
-        ];
-        frame_constants.film_params[0] = settings.clamp.unwrap_or(0.0);
-        frame_constants.film_params[1] = f32::from_bits(settings.inject_non_finite);
+        frame_constants.technique = match it.technique {
+            Technique::Brdf => TECHNIQUE_BRDF,
+            Technique::Light => TECHNIQUE_LIGHT,
+            Technique::Mis => TECHNIQUE_MIS,
+        };
+        frame_constants.light_samples = it.light_samples;
+        frame_constants.brdf_samples = it.brdf_samples;
+        frame_constants.integrator_flags = if it.diffuse_mis {
+            INTEGRATOR_DIFFUSE_MIS
+        } else {
+            0
+        };
+        frame_constants.clamp_luminance = settings.clamp.unwrap_or(0.0);
+        frame_constants.nan_every = settings.inject_non_finite;
         let upload_seconds = prepared.upload_seconds;
         let build = prepared.build.clone();
 
