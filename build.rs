@@ -373,6 +373,14 @@ fn layout_structs(header: &Path) -> String {
                 None => (rust, size, size),
             };
             let (start, start430) = (round(off, a), round(off430, a430));
+            assert!(
+                start == start430,
+                "{}: {}.{} is at offset {start} in scalar layout but {start430} in std430: \
+                 reorder the members so that both agree",
+                header.display(),
+                st.name,
+                f.name
+            );
             (off, off430) = (start + size, start430 + size430);
             (align, align430) = (align.max(a), align430.max(a430));
             for d in &f.doc {
@@ -388,7 +396,13 @@ fn layout_structs(header: &Path) -> String {
         }
         s.push_str("}\n");
         reflection.push_str("        ]),\n");
-        let size = round(off, align);
+        let (size, size430) = (round(off, align), round(off430, align430));
+        assert!(
+            size == size430,
+            "{}: struct {} is {size} bytes in scalar layout but {size430} in std430: pad it",
+            header.display(),
+            st.name
+        );
         known.push((st.name.clone(), align, align430, size));
     }
     s.push_str(

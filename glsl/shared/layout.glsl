@@ -4,10 +4,10 @@
 // same member names and order, documented by the comments here. For the generator, write
 // `struct Name {` on one line and one member per line (`type name;` or `type name[N];`); the `//`
 // lines right above a struct document it, a member's trailing comment (and comment lines directly
-// below it) document that member. Scalar block layout everywhere; members are ordered so that std430
-// would give the same offsets. tests/layout.rs checks every size and offset
-// against the offsets glslang emits for glsl/tests/layout_check.comp, and that this header, that
-// kernel and the Rust mirrors name the same structs.
+// below it) document that member. Scalar block layout everywhere; members are ordered so that
+// std430 gives the same offsets and sizes (build.rs fails otherwise). tests/layout.rs checks every
+// size and offset against the offsets glslang emits for glsl/tests/layout_check.comp, and that this
+// header, that kernel and the Rust mirrors name the same structs.
 #ifndef ILLUM_LAYOUT_GLSL
 #define ILLUM_LAYOUT_GLSL
 
@@ -160,12 +160,10 @@ struct Frame {
     uint light_bvh_nodes;     // GpuLightNode count (0: no finite light)
     uint infinite_first;      // light_refs index of the first infinite light
     uint infinite_count;      // infinite lights (dome, sun), at light_refs[infinite_first ...]
-    uint pad0;
     float clamp_luminance;    // firefly clamp: the most luminance of one camera sample's direct
                               // lighting (0: off; biased when on)
     uint nan_every;           // test hook: every n-th sample is NaN (0: off)
-    uint pad1;
-    uint pad2;
+    uint pad;
 };
 
 // Per-dispatch constants.
@@ -306,13 +304,13 @@ struct BvhHeader {
 struct BvhNode {
     vec3 origin;
     uint scale;
+    uvec4 links;
     uint lo_x;
     uint hi_x;
     uint lo_y;
     uint hi_y;
     uint lo_z;
     uint hi_z;
-    uvec4 links;
     uint pad0;
     uint pad1;
 };
