@@ -1,5 +1,7 @@
 //! Compiles the GLSL kernels in glsl/ to SPIR-V with shaderc (Debian's glslang, linked statically;
-//! see .cargo/config.toml) and generates Rust constants from the shared layout header.
+//! see .cargo/config.toml) and generates the Rust side of the shared layout header
+//! (glsl/shared/layout.glsl): its constants (`layout_consts.rs`) and mirrors of its structs
+//! (`layout_structs.rs`), both included by src/layout.rs.
 //!
 //! Every top-level `glsl/*.comp` is a kernel; `glsl/shared/*.glsl` are included pieces. Each kernel is
 //! compiled once per trace backend (`rq`: hardware ray queries, `bvh`: illum's compute BVH) when its
@@ -74,6 +76,11 @@ fn main() {
         panic!("GLSL compilation failed:\n{}", failures.join("\n"));
     }
     fs::write(out.join("shaders.rs"), index).unwrap();
+    fs::write(
+        out.join("layout_structs.rs"),
+        layout_structs(&glsl.join("shared/layout.glsl")),
+    )
+    .unwrap();
     fs::write(
         out.join("layout_consts.rs"),
         layout_constants(&glsl.join("shared/layout.glsl")),
@@ -166,5 +173,249 @@ fn layout_constants(header: &Path) -> String {
             writeln!(s, "pub const {name}: u32 = {n};").unwrap();
         }
     }
+    s
+}
+
+/// A struct of the shared header, as parsed by `parse_structs`.
+struct GlslStruct {
+    name: String,
+    doc: Vec<String>,
+    fields: Vec<GlslField>,
+}
+
+struct GlslField {
+    ty: String,
+    name: String,
+    array: Option<usize>,
+    doc: Vec<String>,
+}
+
+/// Parses every `struct Name { ... };` of the shared header. The `//` lines right above a struct
+/// (no blank line between) document it. Inside, each member is one `type name;` or
+/// `type name[N];` line; its trailing `//` comment, and the comment-only lines that directly
+/// follow it, document it; comment-only lines after a blank line (or first in the struct)
+/// document the next member.
+fn parse_structs(header: &Path, text: &str) -> Vec<GlslStruct> {
+    let mut structs: Vec<GlslStruct> = Vec::new();
+    let mut pending: Vec<String> = Vec::new();
+    let mut current: Option<GlslStruct> = None;
+    let mut after_field = false;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        let at = || format!("{}:{}", header.display(), n + 1);
+        let comment = |l: &str| l.trim_start_matches('/').trim().to_string();
+        let Some(s) = current.as_mut() else {
+            if line.starts_with("//") {
+                pending.push(comment(line));
+            } else if let Some(rest) = line.strip_prefix("struct ") {
+                let name = rest.trim_end_matches('{').trim();
+                assert!(
+                    rest.trim_end().ends_with('{') && is_ident(name),
+                    "{}: write a struct as `struct Name {{` on one line",
+                    at()
+                );
+                current = Some(GlslStruct {
+                    name: name.to_string(),
+                    doc: std::mem::take(&mut pending),
+                    fields: Vec::new(),
+                });
+                after_field = false;
+            } else {
+                pending.clear();
+            }
+            continue;
+        };
+        if line == "};" {
+            assert!(!s.fields.is_empty(), "{}: empty struct {}", at(), s.name);
+            structs.push(current.take().unwrap());
+            pending.clear();
+        } else if line.is_empty() {
+            after_field = false;
+        } else if line.starts_with("//") {
+            match s.fields.last_mut() {
+                Some(f) if after_field => f.doc.push(comment(line)),
+                _ => pending.push(comment(line)),
+            }
+        } else {
+            let (decl, trailing) = match line.split_once("//") {
+                Some((d, c)) => (d.trim(), Some(comment(c))),
+                None => (line, None),
+            };
+            let parsed = decl.strip_suffix(';').and_then(|d| {
+                let (ty, name) = d.split_once(char::is_whitespace)?;
+                let name = name.trim();
+                let (name, array) = match name.split_once('[') {
+                    Some((nm, len)) => {
+                        (nm.trim(), Some(len.strip_suffix(']')?.trim().parse().ok()?))
+                    }
+                    None => (name, None),
+                };
+                is_ident(name).then(|| (ty.to_string(), name.to_string(), array))
+            });
+            let Some((ty, name, array)) = parsed else {
+                panic!(
+                    "{}: in struct {}, write one member per line as `type name;` or `type name[N];`",
+                    at(),
+                    s.name
+                );
+            };
+            let mut doc = std::mem::take(&mut pending);
+            doc.extend(trailing);
+            s.fields.push(GlslField {
+                ty,
+                name,
+                array,
+                doc,
+            });
+            after_field = true;
+        }
+    }
+    assert!(
+        current.is_none(),
+        "{}: unterminated struct",
+        header.display()
+    );
+    structs
+}
+
+fn is_ident(s: &str) -> bool {
+    !s.is_empty()
+        && !s.starts_with(|c: char| c.is_ascii_digit())
+        && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// (Rust type, scalar alignment, std430 alignment, size) of a GLSL member type; `known` are the
+/// structs parsed so far, with their (scalar alignment, std430 alignment, size).
+fn glsl_type(
+    ty: &str,
+    known: &[(String, usize, usize, usize)],
+) -> Option<(String, usize, usize, usize)> {
+    let scalar = |t: &str| match t {
+        "float" => Some(("f32", 4)),
+        "uint" => Some(("u32", 4)),
+        "int" => Some(("i32", 4)),
+        "uint64_t" => Some(("u64", 8)),
+        "int64_t" => Some(("i64", 8)),
+        _ => None,
+    };
+    if let Some((r, size)) = scalar(ty) {
+        return Some((r.to_string(), size, size, size));
+    }
+    for (prefix, comp) in [("vec", "float"), ("uvec", "uint"), ("ivec", "int")] {
+        if let Some(n) = ty
+            .strip_prefix(prefix)
+            .and_then(|n| n.parse::<usize>().ok())
+            && (2..=4).contains(&n)
+        {
+            let (r, a) = scalar(comp).unwrap();
+            // std430: vec2 aligns to 2 components, vec3 and vec4 to 4.
+            let std430 = a * if n == 2 { 2 } else { 4 };
+            return Some((format!("[{r}; {n}]"), a, std430, a * n));
+        }
+    }
+    known
+        .iter()
+        .find(|(name, ..)| name == ty)
+        .map(|(name, a, a430, size)| (name.clone(), *a, *a430, *size))
+}
+
+/// The Rust mirrors of the header's structs: `#[repr(C)]` structs with the same member names,
+/// order and offsets, their documentation carried over, and `reflection()` for tests/layout.rs.
+/// Panics (failing the build) on a member type it does not know, and on a struct whose scalar
+/// offsets differ from std430's (the header promises they agree).
+fn layout_structs(header: &Path) -> String {
+    let text = fs::read_to_string(header).unwrap_or_else(|e| panic!("{}: {e}", header.display()));
+    let structs = parse_structs(header, &text);
+    let mut known: Vec<(String, usize, usize, usize)> = Vec::new();
+    let mut s = String::from(
+        "// Generated by build.rs from glsl/shared/layout.glsl. Do not edit: edit the header.\n",
+    );
+    let mut reflection = String::new();
+    for st in &structs {
+        let (mut off, mut off430, mut align, mut align430) = (0usize, 0usize, 1usize, 1usize);
+        let round = |x: usize, a: usize| x.div_ceil(a) * a;
+        s.push('\n');
+        for d in &st.doc {
+            writeln!(s, "/// {d}").unwrap();
+        }
+        if !st.doc.is_empty() {
+            s.push_str("///\n");
+        }
+        writeln!(
+            s,
+            "/// Mirrors `struct {}` of glsl/shared/layout.glsl.",
+            st.name
+        )
+        .unwrap();
+        s.push_str(
+            "#[repr(C)]\n#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]\n",
+        );
+        writeln!(s, "pub struct {} {{", st.name).unwrap();
+        writeln!(
+            reflection,
+            "        (\"{0}\", std::mem::size_of::<{0}>(), vec![",
+            st.name
+        )
+        .unwrap();
+        for f in &st.fields {
+            let Some((rust, a, a430, size)) = glsl_type(&f.ty, &known) else {
+                panic!(
+                    "{}: {}.{}: no Rust mirror for GLSL type `{}`",
+                    header.display(),
+                    st.name,
+                    f.name,
+                    f.ty
+                );
+            };
+            // Scalar arrays are tightly packed; std430 rounds the stride up to the alignment.
+            let (rust, size, size430) = match f.array {
+                Some(n) => (format!("[{rust}; {n}]"), size * n, round(size, a430) * n),
+                None => (rust, size, size),
+            };
+            let (start, start430) = (round(off, a), round(off430, a430));
+            assert!(
+                start == start430,
+                "{}: {}.{} is at offset {start} in scalar layout but {start430} in std430: \
+                 reorder the members so that both agree",
+                header.display(),
+                st.name,
+                f.name
+            );
+            (off, off430) = (start + size, start430 + size430);
+            (align, align430) = (align.max(a), align430.max(a430));
+            for d in &f.doc {
+                writeln!(s, "    /// {d}").unwrap();
+            }
+            writeln!(s, "    pub {}: {rust},", f.name).unwrap();
+            writeln!(
+                reflection,
+                "            (\"{0}\", std::mem::offset_of!({1}, {0})),",
+                f.name, st.name
+            )
+            .unwrap();
+        }
+        s.push_str("}\n");
+        reflection.push_str("        ]),\n");
+        let (size, size430) = (round(off, align), round(off430, align430));
+        assert!(
+            size == size430,
+            "{}: struct {} is {size} bytes in scalar layout but {size430} in std430: pad it",
+            header.display(),
+            st.name
+        );
+        known.push((st.name.clone(), align, align430, size));
+    }
+    s.push_str(
+        "\n/// Every struct of the header, in its order.\npub const STRUCT_NAMES: &[&str] = &[\n",
+    );
+    for st in &structs {
+        writeln!(s, "    \"{}\",", st.name).unwrap();
+    }
+    s.push_str(
+        "];\n\n/// Every mirrored struct: what tests/layout.rs checks against the SPIR-V.\n",
+    );
+    s.push_str("pub fn reflection() -> Vec<StructLayout> {\n    vec![\n");
+    s.push_str(&reflection);
+    s.push_str("    ]\n}\n");
     s
 }

@@ -12,13 +12,13 @@ void main() {
     uvec2 local = gl_GlobalInvocationID.xy;
     if (local.x >= pc.tile.z || local.y >= pc.tile.w) return;
     uvec2 pix = local + pc.tile.xy;
-    uint width = frame.size.x, height = frame.size.y;
+    uint width = frame.width, height = frame.height;
     uint pixel = pix.y * width + pix.x;
     // The film holds float32 sums of at most 256 samples per pixel: the host moves them into
     // float64 sums (src/render/film.rs), since long float32 running sums round systematically.
     FilmPixel acc = film[pixel];
-    float clamp_luminance = frame.film_params.x;
-    uint inject = floatBitsToUint(frame.film_params.y);   // test hook, see below
+    float clamp_luminance = frame.clamp_luminance;
+    uint inject = frame.nan_every;   // test hook, see below
     for (uint k = 0u; k < pc.sample_count; ++k) {
         Rng rng = rng_init(pc.seed_lo, pc.seed_hi, pixel, pc.first_sample + k);
         vec2 film_uv = (vec2(pix) + rng_next2(rng)) / vec2(width, height);

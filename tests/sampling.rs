@@ -27,14 +27,15 @@ struct LightParams {
 fn f4(v: DVec3, w: f64) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w as f32]
 }
-fn d3(v: [f32; 4]) -> DVec3 {
+fn d3<const N: usize>(v: [f32; N]) -> DVec3 {
     DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
 }
 
 fn light(kind: u32, p0: [f32; 4], p1: [f32; 4], p2: [f32; 4], two_sided: bool) -> GpuLight {
     GpuLight {
         p0,
-        p1,
+        p1: [p1[0], p1[1], p1[2]],
+        triangle: 0,
         p2,
         radiance: [1.0; 3],
         kind,

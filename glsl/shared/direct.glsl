@@ -54,7 +54,7 @@ bool ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi) {
 uint lights_along(vec3 p, vec3 w, out uint ids[DIRECT_MAX_CROSSED]) {
     uint n = 0u;
     LightRefRef refs = LightRefRef(frame.light_refs);
-    if (frame.light_bvh.x > 0u) {
+    if (frame.light_bvh_nodes > 0u) {
         LightNodeRef nodes = LightNodeRef(frame.light_nodes);
         vec3 inv_d = 1.0 / w;
         uint stack[LIGHT_BVH_STACK];
@@ -73,7 +73,7 @@ uint lights_along(vec3 p, vec3 w, out uint ids[DIRECT_MAX_CROSSED]) {
             }
         }
     }
-    for (uint k = 0u; k < frame.light_bvh.z && n < DIRECT_MAX_CROSSED; ++k) ids[n++] = refs.v[frame.light_bvh.y + k];
+    for (uint k = 0u; k < frame.infinite_count && n < DIRECT_MAX_CROSSED; ++k) ids[n++] = refs.v[frame.infinite_first + k];
     return n;
 }
 
@@ -94,7 +94,7 @@ vec2 triangle_light_texcoord(GpuLight l, vec2 bc) {
     GpuInstance inst = get_instance(l.shape);
     if ((inst.flags & INSTANCE_FLAG_UVS) == 0u) return vec2(0.0);
     GpuVertex v0, v1, v2;
-    instance_triangle(inst, floatBitsToUint(l.p1.w), v0, v1, v2);
+    instance_triangle(inst, l.triangle, v0, v1, v2);
     return (1.0 - bc.x - bc.y) * vec2(v0.u, v0.v) + bc.x * vec2(v1.u, v1.v) + bc.y * vec2(v2.u, v2.v);
 }
 
@@ -217,12 +217,12 @@ vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
 }
 
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
-    uint nlights = frame.size.z;
+    uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
-    uint technique = frame.integrator.x;
-    uint n_max = frame.integrator.y;
-    uint n_b = frame.integrator.z;
-    bool diffuse_mis = (frame.integrator.w & INTEGRATOR_DIFFUSE_MIS) != 0u;
+    uint technique = frame.technique;
+    uint n_max = frame.light_samples;
+    uint n_b = frame.brdf_samples;
+    bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
     GpuDomeSampling dome = dome_sampling();
     bool many = nlights > DIRECT_LOOP_LIGHTS;
     float total_importance = 0.0;

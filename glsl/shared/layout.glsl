@@ -1,8 +1,13 @@
-// The layout contract between Rust (src/layout.rs) and every kernel: structs, bindings, constants.
-// `#define NAME <integer>` lines are turned into Rust constants by build.rs; the structs are mirrored
-// by #[repr(C)] types in src/layout.rs, and tests/layout.rs checks every size and offset against the
-// offsets glslang emits for glsl/tests/layout_check.comp. Scalar block layout everywhere; fields are
-// ordered so that std430 would give the same offsets.
+// The layout contract between Rust and every kernel: structs, bindings, constants, written once
+// here. build.rs generates the Rust side from this file (src/layout.rs includes it): every
+// `#define NAME <integer>` becomes a `u32` constant, every struct a #[repr(C)] Pod mirror with the
+// same member names and order, documented by the comments here. For the generator, write
+// `struct Name {` on one line and one member per line (`type name;` or `type name[N];`); the `//`
+// lines right above a struct document it, a member's trailing comment (and comment lines directly
+// below it) document that member. Scalar block layout everywhere; members are ordered so that
+// std430 gives the same offsets and sizes (build.rs fails otherwise). tests/layout.rs checks every
+// size and offset against the offsets glslang emits for glsl/tests/layout_check.comp, and that this
+// header, that kernel and the Rust mirrors name the same structs.
 #ifndef ILLUM_LAYOUT_GLSL
 #define ILLUM_LAYOUT_GLSL
 
@@ -92,12 +97,12 @@
 #define MASK_LIGHT_SHADOWS 4
 #define MASK_OCCLUDERS 5
 
-// Direct-lighting techniques (Frame.integrator.x): BRDF sampling only, light sampling only, or
+// Direct-lighting techniques (Frame.technique): BRDF sampling only, light sampling only, or
 // both combined by multiple importance sampling (the power heuristic).
 #define TECHNIQUE_BRDF 0
 #define TECHNIQUE_LIGHT 1
 #define TECHNIQUE_MIS 2
-// Frame.integrator.w: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
+// Frame.integrator_flags: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
 // course lights diffuse with light samples only).
 #define INTEGRATOR_DIFFUSE_MIS 1
 
@@ -129,10 +134,18 @@ struct Frame {
     vec4 cam_origin;      // xyz: the camera's position relative to the scene's upload origin (the
                           // camera it was prepared with: 0 unless a prepared scene renders a
                           // moved camera)
-    uvec4 size;           // width, height, light count, shape count
-    uvec4 counts;         // instance count, material count, texture count, dome light index or NONE
-    uvec4 integrator;     // technique (TECHNIQUE_*), most light samples per light, BRDF samples per
-                          // lobe, flags (INTEGRATOR_*)
+    uint width;           // image size in pixels
+    uint height;
+    uint light_count;     // GpuLight entries
+    uint shape_count;     // GpuShape entries
+    uint instance_count;  // GpuInstance entries
+    uint material_count;  // GpuMaterial entries
+    uint texture_count;   // GpuTexture entries
+    uint dome_light;      // GpuLight index of the dome, or NONE
+    uint technique;       // direct lighting: TECHNIQUE_*
+    uint light_samples;   // most light samples per light
+    uint brdf_samples;    // BRDF samples per lobe
+    uint integrator_flags;    // INTEGRATOR_*
     uint64_t instances;   // device addresses of the scene buffers (0 when absent)
     uint64_t vertices;
     uint64_t indices;
@@ -144,10 +157,13 @@ struct Frame {
     uint64_t dome_sampling;   // GpuDomeSampling of the dome's map (0: none; uniform sampling)
     uint64_t light_nodes;     // GpuLightNode array: BVH over the finite lights' bounds
     uint64_t light_refs;      // uint array: light indices in leaf order, then the infinite lights
-    uvec4 light_bvh;          // node count, first infinite ref, infinite light count, unused
-    vec4 film_params;         // x: firefly clamp, the most luminance of one camera sample's direct
-                              // lighting (0: off; biased when on); y: bits of a uint n, test hook:
-                              // every n-th sample is NaN (0: off); zw unused
+    uint light_bvh_nodes;     // GpuLightNode count (0: no finite light)
+    uint infinite_first;      // light_refs index of the first infinite light
+    uint infinite_count;      // infinite lights (dome, sun), at light_refs[infinite_first ...]
+    float clamp_luminance;    // firefly clamp: the most luminance of one camera sample's direct
+                              // lighting (0: off; biased when on)
+    uint nan_every;           // test hook: every n-th sample is NaN (0: off)
+    uint pad;
 };
 
 // Per-dispatch constants.
@@ -215,8 +231,9 @@ struct GpuMaterial {
 struct GpuLight {
     vec4 p0;   // rect: centre; disk/sphere: centre, radius; dome: cos, sin of rotation; sun: direction, cos(theta_max)
                // triangle: vertex 0 (camera-relative world)
-    vec4 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
-               // triangle: edge v1 - v0; w = triangle index within its mesh (uint bits)
+    vec3 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
+               // triangle: edge v1 - v0
+    uint triangle;   // LIGHT_TRIANGLE: the triangle's index within its mesh (0 otherwise)
     vec4 p2;   // rect: full edge v; disk: unit tangent; triangle: edge v2 - v0 (normal: normalize(p1 x p2))
     vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence;
                      // emissive geometry: the material's emission)
@@ -287,13 +304,13 @@ struct BvhHeader {
 struct BvhNode {
     vec3 origin;
     uint scale;
+    uvec4 links;
     uint lo_x;
     uint hi_x;
     uint lo_y;
     uint hi_y;
     uint lo_z;
     uint hi_z;
-    uvec4 links;
     uint pad0;
     uint pad1;
 };

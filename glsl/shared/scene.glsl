@@ -98,8 +98,8 @@ vec4 dome_texture(GpuLight l, vec2 uv) {
 
 // What a ray that leaves the scene along dir sees of the dome.
 vec3 dome_radiance(vec3 dir) {
-    if (!has_feature(FEATURE_DOME) || frame.counts.w == NONE) return vec3(0.0);
-    GpuLight l = get_light(frame.counts.w);
+    if (!has_feature(FEATURE_DOME) || frame.dome_light == NONE) return vec3(0.0);
+    GpuLight l = get_light(frame.dome_light);
     return l.radiance * dome_texture(l, dome_uv(l, dir)).rgb;
 }
 

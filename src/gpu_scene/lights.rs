@@ -123,7 +123,7 @@ mod tests {
             lights.push(GpuLight {
                 kind: [LIGHT_SPHERE, LIGHT_RECT, LIGHT_DISK, LIGHT_TRIANGLE][i % 4],
                 p0: [f.sin() * 10.0, f.cos() * 3.0, f * 0.5, 0.2],
-                p1: [0.0, 1.0, 0.0, 0.0],
+                p1: [0.0, 1.0, 0.0],
                 p2: [0.3, 0.0, 0.1, 0.0],
                 ..Default::default()
             });

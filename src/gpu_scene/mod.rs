@@ -59,6 +59,9 @@ fn v4(v: DVec3, w: f64) -> [f32; 4] {
 fn v3(v: Vec3) -> [f32; 3] {
     v.to_array()
 }
+fn d3(v: DVec3) -> [f32; 3] {
+    v.as_vec3().to_array()
+}
 
 fn rows3x4(m: &DMat4) -> [[f32; 4]; 3] {
     let r = |i: usize| {
@@ -139,8 +142,8 @@ pub fn set_camera(frame: &mut Frame, cam: &crate::scene::Camera, origin: DVec3) 
     frame.cam_right = v4(right_dir * tan_half * aspect, 0.0);
     frame.cam_up = v4(up_dir * tan_half, 0.0);
     frame.cam_origin = v4(cam.position - origin, 0.0);
-    frame.size[0] = cam.width;
-    frame.size[1] = cam.height;
+    frame.width = cam.width;
+    frame.height = cam.height;
 }
 
 impl GpuScene {
@@ -282,7 +285,7 @@ impl GpuScene {
                 LightKind::Rect { center, u, v } => {
                     g.kind = LIGHT_RECT;
                     g.p0 = v4(*center - origin, 0.0);
-                    g.p1 = v4(*u, 0.0);
+                    g.p1 = d3(*u);
                     g.p2 = v4(*v, 0.0);
                     g.area = u.cross(*v).length() as f32;
                     features |= FEATURE_AREA_LIGHTS;
@@ -300,7 +303,7 @@ impl GpuScene {
                     let n = normal.normalize();
                     g.kind = LIGHT_DISK;
                     g.p0 = v4(*center - origin, *radius);
-                    g.p1 = v4(n, 0.0);
+                    g.p1 = d3(n);
                     g.p2 = v4(perpendicular(n), 0.0);
                     g.area = (std::f64::consts::PI * radius * radius) as f32;
                     features |= FEATURE_AREA_LIGHTS;
@@ -346,7 +349,7 @@ impl GpuScene {
                     let om = 2.0 * (half * 0.5).sin().powi(2);
                     g.kind = LIGHT_SUN;
                     g.p0 = v4(direction.normalize(), half.cos());
-                    g.p1 = [om as f32, 0.0, 0.0, 0.0];
+                    g.p1 = [om as f32, 0.0, 0.0];
                     features |= FEATURE_SUN;
                     None
                 }
@@ -381,7 +384,7 @@ impl GpuScene {
             };
             let sh = &shapes[si];
             g.p0 = sh.p0;
-            g.p1 = sh.p1;
+            g.p1 = [sh.p1[0], sh.p1[1], sh.p1[2]];
             g.p2 = sh.p2;
             let pi = std::f32::consts::PI;
             (g.kind, g.area) = match sh.kind {
@@ -411,11 +414,10 @@ impl GpuScene {
                 if (area as f32) <= 0.0 {
                     continue; // degenerate: emits nothing
                 }
-                let mut p1 = v4(b - a, 0.0);
-                p1[3] = f32::from_bits(t as u32); // bits, not a number: see layout.glsl
                 lights.push(GpuLight {
                     p0: v4(a, 0.0),
-                    p1,
+                    p1: d3(b - a),
+                    triangle: t as u32,
                     p2: v4(c - a, 0.0),
                     radiance: v3(m.emission),
                     kind: LIGHT_TRIANGLE,
@@ -533,15 +535,12 @@ impl GpuScene {
         }
         let addr = |b: &Option<Buffer>| b.as_ref().map_or(0, |b| b.address);
         let mut frame = Frame {
-            size: [0, 0, lights.len() as u32, shapes.len() as u32],
-            counts: [
-                gpu_instances.len() as u32,
-                materials.len() as u32,
-                textures.len() as u32,
-                dome,
-            ],
-            // Set by the renderer from its settings.
-            integrator: [0; 4],
+            light_count: lights.len() as u32,
+            shape_count: shapes.len() as u32,
+            instance_count: gpu_instances.len() as u32,
+            material_count: materials.len() as u32,
+            texture_count: textures.len() as u32,
+            dome_light: dome,
             instances: addr(&instance_buffer),
             vertices: addr(&vertex_buffer),
             indices: addr(&index_buffer),
@@ -553,14 +552,10 @@ impl GpuScene {
             dome_sampling: addr(&dome_sampling),
             light_nodes: addr(&light_node_buffer),
             light_refs: addr(&light_ref_buffer),
-            light_bvh: [
-                light_bvh.nodes.len() as u32,
-                light_bvh.infinite_first,
-                light_bvh.infinite_count,
-                0,
-            ],
-            // Set by the renderer from its settings.
-            film_params: [0.0; 4],
+            light_bvh_nodes: light_bvh.nodes.len() as u32,
+            infinite_first: light_bvh.infinite_first,
+            infinite_count: light_bvh.infinite_count,
+            // The camera (set_camera), the integrator and film settings are set by the renderer.
             ..Default::default()
         };
         set_camera(&mut frame, &scene.camera, origin);

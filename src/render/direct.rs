@@ -64,20 +64,18 @@ impl Integrator for Direct {
 
     fn configure(&self, frame: &mut Frame) {
         let it = &self.0;
-        frame.integrator = [
-            match it.technique {
-                Technique::Brdf => TECHNIQUE_BRDF,
-                Technique::Light => TECHNIQUE_LIGHT,
-                Technique::Mis => TECHNIQUE_MIS,
-            },
-            it.light_samples,
-            it.brdf_samples,
-            if it.diffuse_mis {
-                INTEGRATOR_DIFFUSE_MIS
-            } else {
-                0
-            },
-        ];
+        frame.technique = match it.technique {
+            Technique::Brdf => TECHNIQUE_BRDF,
+            Technique::Light => TECHNIQUE_LIGHT,
+            Technique::Mis => TECHNIQUE_MIS,
+        };
+        frame.light_samples = it.light_samples;
+        frame.brdf_samples = it.brdf_samples;
+        frame.integrator_flags = if it.diffuse_mis {
+            INTEGRATOR_DIFFUSE_MIS
+        } else {
+            0
+        };
     }
 
     fn kernels(

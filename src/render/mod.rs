@@ -202,8 +202,8 @@ impl Renderer {
         crate::gpu_scene::set_camera(&mut frame_constants, camera, gpu.origin);
         let integrator = integrator::select(settings);
         integrator.configure(&mut frame_constants);
-        frame_constants.film_params[0] = settings.clamp.unwrap_or(0.0);
-        frame_constants.film_params[1] = f32::from_bits(settings.inject_non_finite);
+        frame_constants.clamp_luminance = settings.clamp.unwrap_or(0.0);
+        frame_constants.nan_every = settings.inject_non_finite;
         let upload_seconds = prepared.upload_seconds;
         let build = prepared.build.clone();
 
