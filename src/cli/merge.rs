@@ -5,7 +5,7 @@ use super::check_outputs;
 use crate::output::partial::read_partial;
 use crate::output::{ImageMetadata, write_exr, write_png};
 use crate::render::job::{Part, merge};
-use anyhow::{Context as _, Result, bail};
+use anyhow::{Context as _, Result};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -26,21 +26,7 @@ pub struct MergeArgs {
 }
 
 pub fn run(a: &MergeArgs) -> Result<()> {
-    let ext = a
-        .output
-        .extension()
-        .map(|e| e.to_string_lossy().to_lowercase());
-    let (exr_path, png_path) = match ext.as_deref() {
-        Some("exr") => (
-            a.output.clone(),
-            a.png.then(|| a.output.with_extension("png")),
-        ),
-        Some("png") => (a.output.with_extension("exr"), Some(a.output.clone())),
-        _ => bail!(
-            "-o {}: the output must end in .exr or .png",
-            a.output.display()
-        ),
-    };
+    let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
     check_outputs(
         [Some(&exr_path), png_path.as_ref()]
             .into_iter()

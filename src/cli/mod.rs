@@ -156,6 +156,22 @@ pub fn check_outputs<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Result<()
     Ok(())
 }
 
+/// The image files of `-o OUTPUT`: the EXR always, and a PNG for `-o x.png` (the EXR beside it)
+/// or with `--png`.
+pub fn image_paths(output: &Path, png: bool) -> Result<(PathBuf, Option<PathBuf>)> {
+    let ext = output
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase());
+    Ok(match ext.as_deref() {
+        Some("exr") => (output.to_path_buf(), png.then(|| output.with_extension("png"))),
+        Some("png") => (output.with_extension("exr"), Some(output.to_path_buf())),
+        _ => anyhow::bail!(
+            "-o {}: the output must end in .exr or .png",
+            output.display()
+        ),
+    })
+}
+
 /// The EXR header of a render: what `illum render` and `illum compare` write alike.
 pub fn image_metadata(
     out: &RenderOutput,

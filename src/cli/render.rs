@@ -102,21 +102,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     if a.samples.is_some() || a.crop.is_some() {
         return run_job(a);
     }
-    let ext = a
-        .output
-        .extension()
-        .map(|e| e.to_string_lossy().to_lowercase());
-    let (exr_path, png_path) = match ext.as_deref() {
-        Some("exr") => (
-            a.output.clone(),
-            a.png.then(|| a.output.with_extension("png")),
-        ),
-        Some("png") => (a.output.with_extension("exr"), Some(a.output.clone())),
-        _ => bail!(
-            "-o {}: the output must end in .exr or .png",
-            a.output.display()
-        ),
-    };
+    let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
     // Every path is checked before anything slow (scene loading, device, kernels, rendering).
     check_outputs(
         [
