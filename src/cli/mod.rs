@@ -163,7 +163,10 @@ pub fn image_paths(output: &Path, png: bool) -> Result<(PathBuf, Option<PathBuf>
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase());
     Ok(match ext.as_deref() {
-        Some("exr") => (output.to_path_buf(), png.then(|| output.with_extension("png"))),
+        Some("exr") => (
+            output.to_path_buf(),
+            png.then(|| output.with_extension("png")),
+        ),
         Some("png") => (output.with_extension("exr"), Some(output.to_path_buf())),
         _ => anyhow::bail!(
             "-o {}: the output must end in .exr or .png",
