@@ -12,6 +12,9 @@ cargo clippy --release --all-targets -- -D warnings
 echo "== Mesa 25 lavapipe (bookworm-backports), trace path auto"
 cargo test --release
 
+echo "== Slurm: one render in 4 parts on a single-node cluster, a task killed and resubmitted"
+scripts/test-slurm.sh
+
 echo "== Mesa 25 lavapipe, the other trace paths forced"
 ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --test report
 ILLUM_TEST_TRACE=bvh cargo test --release --test render --test direct --test report --test cli
