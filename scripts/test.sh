@@ -8,6 +8,7 @@ export CARGO_TERM_COLOR=never
 
 cargo fmt --all -- --check
 cargo clippy --release --all-targets -- -D warnings
+scripts/test-k8s.sh
 
 echo "== Mesa 25 lavapipe (bookworm-backports), trace path auto"
 cargo test --release
