@@ -3,6 +3,9 @@
 # Idempotent: safe to run again. Needs root (or sudo).
 #   - bookworm-backports (deb822) for Mesa 25's lavapipe, which has VK_KHR_ray_query
 #   - libvulkan1, vulkan-validationlayers, g++, libshaderc-dev (linked statically by build.rs)
+#   - slurm-wlm and munge, for the single-node Slurm that scripts/test-slurm.sh starts (no
+#     daemon is enabled or started here; Debian's packages start none without a slurm.conf)
+#   - python3-venv, and kubernetes-validate (PyPI, pinned) in .venv-k8s/ for scripts/test-k8s.sh
 #   - Debian's stock Mesa 22.3.6 lavapipe (no ray query) unpacked under .vk/mesa-stock, so the
 #     compute-BVH path can be tested on a real device that lacks the extension.
 set -euo pipefail
@@ -32,7 +35,7 @@ if [ ! -f "$bp" ] || [ "$(cat "$bp")" != "$want" ]; then
 fi
 
 need_pkgs=()
-for p in libvulkan1 vulkan-validationlayers g++ libshaderc-dev glslang-dev; do
+for p in libvulkan1 vulkan-validationlayers g++ libshaderc-dev glslang-dev slurm-wlm munge python3-venv; do
   dpkg -s "$p" >/dev/null 2>&1 || need_pkgs+=("$p")
 done
 mesa_ver=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
@@ -67,5 +70,12 @@ if [ ! -f "$stock/icd.json" ]; then
   "ICD": { "library_path": "$lib", "api_version": "1.3.230" } }
 JSON
   rm -rf "$tmp"
+fi
+# The Kubernetes manifest's schema check (scripts/test-k8s.sh): Kubernetes' own API schemas,
+# bundled by kubernetes-validate, offline once installed.
+venv="$here/.venv-k8s"
+if [ ! -x "$venv/bin/kubernetes-validate" ]; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install -q --disable-pip-version-check kubernetes-validate==1.37.0
 fi
 echo "setup-debian: ok (mesa $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers); stock lavapipe at $stock)"

@@ -8,9 +8,13 @@ export CARGO_TERM_COLOR=never
 
 cargo fmt --all -- --check
 cargo clippy --release --all-targets -- -D warnings
+scripts/test-k8s.sh
 
 echo "== Mesa 25 lavapipe (bookworm-backports), trace path auto"
 cargo test --release
+
+echo "== Slurm: one render in 4 parts on a single-node cluster, a task killed and resubmitted"
+scripts/test-slurm.sh
 
 echo "== Mesa 25 lavapipe, the other trace paths forced"
 ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --test report

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod compare;
 pub mod devices;
 pub mod merge;
+pub mod part;
 pub mod render;
 pub mod schema;
 mod signal;

@@ -71,6 +71,16 @@ pub struct RenderArgs {
     /// written as a partial EXR for `illum merge`.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_crop)]
     pub crop: Option<Window>,
+    /// Render part K of N (K from 0 to N-1, e.g. $SLURM_ARRAY_TASK_ID or $JOB_COMPLETION_INDEX)
+    /// of the image as a partial EXR; `illum merge` of the N parts is bit-identical to the render
+    /// in one piece, whatever N (docs/farm.md). [default --spp: 16, as a whole render]
+    #[arg(long, value_name = "K/N", value_parser = super::part::parse_part,
+          conflicts_with_all = ["samples", "crop"])]
+    pub part: Option<(u32, u32)>,
+    /// How --part cuts the image: samples (whole 256-sample blocks; row bands of a block when N
+    /// exceeds the blocks) or tiles (a grid of N windows, every sample).
+    #[arg(long, value_enum, default_value = "samples", requires = "part")]
+    pub split: super::part::Split,
 }
 
 fn parse_range(s: &str) -> std::result::Result<(u32, u32), String> {
@@ -99,7 +109,7 @@ fn parse_crop(s: &str) -> std::result::Result<Window, String> {
 
 pub fn run(a: &RenderArgs) -> Result<()> {
     crate::output::check_writable(&a.output)?;
-    if a.samples.is_some() || a.crop.is_some() {
+    if a.samples.is_some() || a.crop.is_some() || a.part.is_some() {
         return run_job(a);
     }
     let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
@@ -369,16 +379,21 @@ fn summary(
     eprintln!("{line}");
 }
 
-/// One job of a split render: samples A..B and/or a pixel window, written as a partial EXR
-/// (src/output/partial.rs) that `illum merge` combines with the others, bit for bit.
+/// One job of a split render: samples A..B and/or a pixel window, or part K of N, written as a
+/// partial EXR (src/output/partial.rs) that `illum merge` combines with the others, bit for bit.
 fn run_job(a: &RenderArgs) -> Result<()> {
+    let what = if a.part.is_some() {
+        "--part"
+    } else {
+        "--samples and --crop"
+    };
     let ext = a
         .output
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase());
     if ext.as_deref() != Some("exr") {
         bail!(
-            "-o {}: a job of a split render (--samples, --crop) writes a partial EXR: name a .exr file",
+            "-o {}: a job of a split render ({what}) writes a partial EXR: name a .exr file",
             a.output.display()
         );
     }
@@ -389,15 +404,32 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         || a.png
     {
         bail!(
-            "--samples and --crop render one job of an image: they take --spp, not --time, \
+            "{what} render one job of an image: they take --spp, not --time, \
              --reference, --report, --report-plot or --png (merge the jobs first)"
         );
     }
-    let Some(spp) = a.spp else {
-        bail!("--samples and --crop need --spp: the samples per pixel of the whole image");
+    let spp = match (a.spp, a.part) {
+        (Some(n), _) => n,
+        // A part of the default render (16 spp), like `illum render` without --spp.
+        (None, Some(_)) => 16,
+        (None, None) => {
+            bail!("--samples and --crop need --spp: the samples per pixel of the whole image")
+        }
     };
     check_outputs([a.output.as_path()])?;
     let scene = a.scene.load()?;
+    let (samples, crop, label) = match a.part {
+        Some((k, n)) => {
+            let jobs = super::part::plan(n, a.split, spp, scene.camera.width, scene.camera.height)?;
+            let j = jobs[k as usize];
+            (
+                Some(j.samples),
+                Some(j.crop),
+                format!("part {k}/{n} ({}), ", a.split.name()),
+            )
+        }
+        None => (a.samples, a.crop, String::new()),
+    };
     let cancel = signal::install();
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
@@ -411,14 +443,29 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         trace: a.trace,
         clamp: a.clamp,
         cancel: Some(cancel),
-        samples: a.samples,
-        crop: a.crop,
+        samples,
+        crop,
         ..Default::default()
     };
     let bar = progress_bar(a.quiet, spp, None);
     let setup_done = announce_compiles(&ctx, &bar, a.quiet);
+    let started = Instant::now();
     let out = renderer.render(&scene, &settings, &mut |done, budget| {
-        setup_done.store(true, Ordering::SeqCst);
+        if !setup_done.swap(true, Ordering::SeqCst) && !a.quiet {
+            // A line for a farm's log: when set-up ended and what this job renders.
+            let (s, w) = (
+                samples.unwrap_or((0, spp)),
+                crop.unwrap_or(Window::full(scene.camera.width, scene.camera.height)),
+            );
+            bar.suspend(|| {
+                eprintln!(
+                    "illum: {label}samples {}..{} of {spp}, pixels {w}: set-up done in {:.2} s, rendering",
+                    s.0,
+                    s.1,
+                    started.elapsed().as_secs_f64()
+                )
+            });
+        }
         bar.set_length(u64::from(budget));
         bar.set_position(u64::from(done));
     });
@@ -442,7 +489,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
     super::check_validation(&ctx)?;
     if !a.quiet {
         eprintln!(
-            "illum: job samples {}..{} of {spp}, pixels {} of {}x{}: {:.2} s rendering, {:.2} s set-up; wrote {}",
+            "illum: job {label}samples {}..{} of {spp}, pixels {} of {}x{}: {:.2} s rendering, {:.2} s set-up; wrote {}",
             info.samples.0,
             info.samples.1,
             info.window,
