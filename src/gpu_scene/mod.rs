@@ -130,6 +130,55 @@ fn shape_aabb(s: &GpuShape) -> [f32; 6] {
     [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]
 }
 
+/// The device encoding of an analytic shape's geometry, camera-relative: the one place where a
+/// sphere, rect or disk becomes p0/p1/p2 (glsl/shared/layout.glsl), for scene shapes, area lights,
+/// their visible surfaces and emissive shapes alike.
+struct Encoded {
+    shape_kind: u32,
+    light_kind: u32,
+    p0: [f32; 4],
+    p1: [f32; 3],
+    p2: [f32; 4],
+    area: f32,
+}
+
+fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
+    use std::f64::consts::PI;
+    match *g {
+        ShapeGeometry::Sphere { center, radius } => Encoded {
+            shape_kind: SHAPE_SPHERE,
+            light_kind: LIGHT_SPHERE,
+            p0: v4(center - origin, radius),
+            p1: [0.0; 3],
+            p2: [0.0; 4],
+            area: (4.0 * PI * radius * radius) as f32,
+        },
+        ShapeGeometry::Rect { center, u, v } => Encoded {
+            shape_kind: SHAPE_RECT,
+            light_kind: LIGHT_RECT,
+            p0: v4(center - origin, 0.0),
+            p1: d3(u),
+            p2: v4(v, 0.0),
+            area: u.cross(v).length() as f32,
+        },
+        ShapeGeometry::Disk {
+            center,
+            normal,
+            radius,
+        } => {
+            let n = normal.normalize();
+            Encoded {
+                shape_kind: SHAPE_DISK,
+                light_kind: LIGHT_DISK,
+                p0: v4(center - origin, radius),
+                p1: d3(n),
+                p2: v4(perpendicular(n), 0.0),
+                area: (PI * radius * radius) as f32,
+            }
+        }
+    }
+}
+
 /// Writes `cam` into the frame constants of a scene uploaded relative to `origin` (in double
 /// precision: the camera may have moved since the upload).
 pub fn set_camera(frame: &mut Frame, cam: &crate::scene::Camera, origin: DVec3) {
@@ -218,36 +267,15 @@ impl GpuScene {
         // Analytic shapes: scene geometry first, then the visible surfaces of area lights.
         let mut shapes: Vec<GpuShape> = Vec::new();
         let shape_of = |g: &ShapeGeometry, material: u32, light: u32| -> GpuShape {
-            match g {
-                ShapeGeometry::Sphere { center, radius } => GpuShape {
-                    p0: v4(*center - origin, *radius),
-                    kind: SHAPE_SPHERE,
-                    material,
-                    light,
-                    ..Default::default()
-                },
-                ShapeGeometry::Rect { center, u, v } => GpuShape {
-                    p0: v4(*center - origin, 0.0),
-                    p1: v4(*u, 0.0),
-                    p2: v4(*v, 0.0),
-                    kind: SHAPE_RECT,
-                    material,
-                    light,
-                    ..Default::default()
-                },
-                ShapeGeometry::Disk {
-                    center,
-                    normal,
-                    radius,
-                } => GpuShape {
-                    p0: v4(*center - origin, *radius),
-                    p1: v4(normal.normalize(), 0.0),
-                    p2: v4(perpendicular(normal.normalize()), 0.0),
-                    kind: SHAPE_DISK,
-                    material,
-                    light,
-                    ..Default::default()
-                },
+            let e = encode(g, origin);
+            GpuShape {
+                p0: e.p0,
+                p1: [e.p1[0], e.p1[1], e.p1[2], 0.0],
+                p2: e.p2,
+                kind: e.shape_kind,
+                material,
+                light,
+                ..Default::default()
             }
         };
         for s in &scene.shapes {
@@ -281,48 +309,14 @@ impl GpuScene {
                     | if l.visible { LIGHT_FLAG_VISIBLE } else { 0 },
                 ..Default::default()
             };
-            let surface = match &l.kind {
-                LightKind::Rect { center, u, v } => {
-                    g.kind = LIGHT_RECT;
-                    g.p0 = v4(*center - origin, 0.0);
-                    g.p1 = d3(*u);
-                    g.p2 = v4(*v, 0.0);
-                    g.area = u.cross(*v).length() as f32;
-                    features |= FEATURE_AREA_LIGHTS;
-                    Some(ShapeGeometry::Rect {
-                        center: *center,
-                        u: *u,
-                        v: *v,
-                    })
-                }
-                LightKind::Disk {
-                    center,
-                    normal,
-                    radius,
-                } => {
-                    let n = normal.normalize();
-                    g.kind = LIGHT_DISK;
-                    g.p0 = v4(*center - origin, *radius);
-                    g.p1 = d3(n);
-                    g.p2 = v4(perpendicular(n), 0.0);
-                    g.area = (std::f64::consts::PI * radius * radius) as f32;
-                    features |= FEATURE_AREA_LIGHTS;
-                    Some(ShapeGeometry::Disk {
-                        center: *center,
-                        normal: n,
-                        radius: *radius,
-                    })
-                }
-                LightKind::Sphere { center, radius } => {
-                    g.kind = LIGHT_SPHERE;
-                    g.p0 = v4(*center - origin, *radius);
-                    g.area = (4.0 * std::f64::consts::PI * radius * radius) as f32;
-                    features |= FEATURE_AREA_LIGHTS;
-                    Some(ShapeGeometry::Sphere {
-                        center: *center,
-                        radius: *radius,
-                    })
-                }
+            let surface = l.kind.surface();
+            if let Some(geom) = &surface {
+                let e = encode(geom, origin);
+                (g.kind, g.p0, g.p1, g.p2, g.area) = (e.light_kind, e.p0, e.p1, e.p2, e.area);
+                features |= FEATURE_AREA_LIGHTS;
+            }
+            match &l.kind {
+                LightKind::Rect { .. } | LightKind::Disk { .. } | LightKind::Sphere { .. } => {}
                 LightKind::Dome {
                     rotation_deg,
                     convention,
@@ -338,7 +332,6 @@ impl GpuScene {
                     dome = index;
                     dome_map = (i, *convention);
                     features |= FEATURE_DOME;
-                    None
                 }
                 LightKind::Sun {
                     direction,
@@ -351,9 +344,8 @@ impl GpuScene {
                     g.p0 = v4(direction.normalize(), half.cos());
                     g.p1 = [om as f32, 0.0, 0.0];
                     features |= FEATURE_SUN;
-                    None
                 }
-            };
+            }
             // The light's surface: seen by camera rays when visible, by shadow rays when it
             // casts shadows (an opaque object, the default).
             let mask = if l.visible { MASK_LIGHTS } else { 0 }
@@ -382,21 +374,8 @@ impl GpuScene {
                 flags: LIGHT_FLAG_GEOMETRY | if m.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
                 ..Default::default()
             };
-            let sh = &shapes[si];
-            g.p0 = sh.p0;
-            g.p1 = [sh.p1[0], sh.p1[1], sh.p1[2]];
-            g.p2 = sh.p2;
-            let pi = std::f32::consts::PI;
-            (g.kind, g.area) = match sh.kind {
-                SHAPE_SPHERE => (LIGHT_SPHERE, 4.0 * pi * sh.p0[3] * sh.p0[3]),
-                SHAPE_RECT => (
-                    LIGHT_RECT,
-                    Vec3::from_slice(&sh.p1[..3])
-                        .cross(Vec3::from_slice(&sh.p2[..3]))
-                        .length(),
-                ),
-                _ => (LIGHT_DISK, pi * sh.p0[3] * sh.p0[3]),
-            };
+            let e = encode(&s.geometry, origin);
+            (g.kind, g.p0, g.p1, g.p2, g.area) = (e.light_kind, e.p0, e.p1, e.p2, e.area);
             shapes[si].light = lights.len() as u32;
             lights.push(g);
             features |= FEATURE_AREA_LIGHTS;

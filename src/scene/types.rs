@@ -360,6 +360,27 @@ impl Material {
     }
 }
 
+impl LightKind {
+    /// The surface of an area light, shaped like the analytic shape of its name; None for the
+    /// dome and the sun.
+    pub fn surface(&self) -> Option<ShapeGeometry> {
+        match *self {
+            LightKind::Rect { center, u, v } => Some(ShapeGeometry::Rect { center, u, v }),
+            LightKind::Disk {
+                center,
+                normal,
+                radius,
+            } => Some(ShapeGeometry::Disk {
+                center,
+                normal,
+                radius,
+            }),
+            LightKind::Sphere { center, radius } => Some(ShapeGeometry::Sphere { center, radius }),
+            LightKind::Dome { .. } | LightKind::Sun { .. } => None,
+        }
+    }
+}
+
 impl Light {
     /// color * intensity * 2^exposure.
     pub fn radiance(&self) -> Vec3 {
