@@ -335,7 +335,7 @@ fn help_documents_options_and_defaults() {
     let (code, out, _) = illum(&["render", "--help"]);
     assert_eq!(code, 0);
     for needle in [
-        "--height <HEIGHT>  ",
+        "--height <HEIGHT>",
         "follows the camera's aspect",
         "[default: 16",
         "[default: illum.exr]",
