@@ -133,9 +133,9 @@ def sliver_emitter(y, half, n=16):
 def scenes():
     s = {}
     s["microfacet-alpha-1e-4"] = two_lobes(
-        1e-4, "D-BRDF (left) and GGX (right) at alpha 1e-4, mirrors, under a constant dome", DOME)
+        1e-4, "D-BRDF (left) and GGX (right) at alpha 1e-4, Mitsuba's floor: the sharpest lobes sampled (peak D 3e7), under a constant dome", DOME)
     s["microfacet-alpha-1e-3"] = two_lobes(
-        1e-3, "D-BRDF and GGX at alpha 1e-3: the sharpest lobes that are sampled (peak D 3e5)", DOME)
+        1e-3, "D-BRDF and GGX at alpha 1e-3 (peak D 3e5), under a constant dome", DOME)
     s["microfacet-alpha-1"] = two_lobes(
         1.0, "D-BRDF and GGX at alpha 1: half the D-BRDF's samples go below the horizon",
         {"key": {"rect": {"center": [0, 2, 0], "normal": [0, -1, 0], "size": [1, 1]},

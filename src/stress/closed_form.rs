@@ -21,8 +21,9 @@ use std::f64::consts::PI;
 
 /// Positions per pixel along each axis.
 const SUBPIXELS: u32 = 8;
-/// Below this alpha along both axes a lobe is a mirror (the renderer's MF_DELTA_ALPHA), and at
-/// most this its directional albedo under a constant dome differs from F by < 2e-5 for
+/// Below this alpha along both axes the closed form takes a lobe for a mirror of albedo F (the
+/// renderer samples it as a lobe down to 1e-4): at most this, its directional albedo under a
+/// constant dome differs from F by < 2e-5 for
 /// n·v >= 0.2 (GGX Smith: Λ ≈ α² tan²θ / 4); the D-BRDF has no shadowing term, its albedo is F
 /// while the reflected lobe stays above the horizon (exp(-cot²θ / α²) ≈ 0).
 const MIRROR_ALPHA: f32 = 1e-3;
