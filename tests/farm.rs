@@ -49,8 +49,12 @@ fn parts_merge_bit_identical_whatever_n() {
                     let s = settings(Some(j.samples), Some(j.crop));
                     let out = r.render(&scene, &s, &mut |_, _| {}).unwrap();
                     let path = temp_path(&format!("farm-{}-{k}-of-{n}.exr", split.name()));
-                    write_partial(&path, &part_info(&scene, &s, &out, "test"), &out.job.sums)
-                        .unwrap();
+                    write_partial(
+                        &path,
+                        &part_info(&scene, &s, &out, "test").unwrap(),
+                        &out.job.sums,
+                    )
+                    .unwrap();
                     let (info, sums) = read_partial(&path).unwrap();
                     Part { path, info, sums }
                 })

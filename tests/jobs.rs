@@ -42,7 +42,12 @@ fn job(r: &Renderer, scene: &illum::scene::Scene, s: &RenderSettings, name: &str
         .render(scene, s, &mut |_, _| {})
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let path = temp_path(&format!("{name}.exr"));
-    write_partial(&path, &part_info(scene, s, &out, "test"), &out.job.sums).unwrap();
+    write_partial(
+        &path,
+        &part_info(scene, s, &out, "test").unwrap(),
+        &out.job.sums,
+    )
+    .unwrap();
     let (info, sums) = read_partial(&path).unwrap();
     assert_eq!(
         sums, out.job.sums,
@@ -274,4 +279,23 @@ fn the_command_line_splits_and_merges_exactly() {
         err.contains("cli-a.exr") && err.contains("illum.samples"),
         "{err}"
     );
+}
+
+/// An interrupted job has no part to write: its sums may hold part of a block it does not own.
+#[test]
+fn an_interrupted_job_writes_no_part() {
+    let ctx = context();
+    let scene = scene(SCENE);
+    let r = Renderer::new(ctx.clone());
+    let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    let s = RenderSettings {
+        cancel: Some(cancel),
+        ..settings(TraceMode::Bvh, 1, Some((100, 600)), None)
+    };
+    let out = r.render(&scene, &s, &mut |_, _| {}).unwrap();
+    assert!(out.stats.interrupted);
+    let e =
+        part_info(&scene, &s, &out, "test").expect_err("an interrupted job must not make a part");
+    assert!(e.to_string().contains("interrupted"), "{e}");
+    assert_no_validation_messages(&ctx);
 }

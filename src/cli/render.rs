@@ -484,7 +484,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         }
         .into());
     }
-    let info = crate::render::job::part_info(&scene, &settings, &out, &ctx.info().name);
+    let info = crate::render::job::part_info(&scene, &settings, &out, &ctx.info().name)?;
     crate::output::partial::write_partial(&a.output, &info, &out.job.sums)?;
     super::check_validation(&ctx)?;
     if !a.quiet {

@@ -77,14 +77,21 @@ pub fn scene_hash(scene: &Scene) -> String {
     format!("{:016x}", h.0)
 }
 
-/// The description a render's job writes beside its sums.
+/// The description a render's job writes beside its sums. An interrupted render is no job: its
+/// sums may hold part of a block it does not own, so it has no part to write.
 pub fn part_info(
     scene: &Scene,
     settings: &RenderSettings,
     out: &RenderOutput,
     device: &str,
-) -> PartInfo {
-    PartInfo {
+) -> Result<PartInfo> {
+    if out.stats.interrupted {
+        return Err(Error::Invalid(format!(
+            "the job was interrupted after {} samples: an incomplete job has no part to write; render it again",
+            out.stats.spp
+        )));
+    }
+    Ok(PartInfo {
         samples: out.job.range,
         window: out.job.sums.window,
         frame: (scene.camera.width, scene.camera.height),
@@ -97,7 +104,7 @@ pub fn part_info(
         device: device.to_string(),
         render_seconds: out.stats.render_seconds,
         setup_seconds: out.stats.setup_seconds,
-    }
+    })
 }
 
 /// One job read back: where it came from, what it says, its sums.
