@@ -2,10 +2,9 @@
 //! into the image a render in one piece writes, bit for bit (src/render/job.rs).
 
 use super::check_outputs;
-use crate::output::partial::read_partial;
 use crate::output::{ImageMetadata, write_exr, write_png};
-use crate::render::job::{Part, merge};
-use anyhow::{Context as _, Result};
+use crate::render::job::merge_files;
+use anyhow::Result;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -34,18 +33,8 @@ pub fn run(a: &MergeArgs) -> Result<()> {
             .map(PathBuf::as_path),
     )?;
     let start = Instant::now();
-    let mut parts = Vec::with_capacity(a.parts.len());
-    for path in &a.parts {
-        let (info, sums) =
-            read_partial(path).with_context(|| format!("illum merge: part {}", path.display()))?;
-        parts.push(Part {
-            path: path.clone(),
-            info,
-            sums,
-        });
-    }
-    let read_seconds = start.elapsed().as_secs_f64();
-    let m = merge(&parts)?;
+    // Headers first (a mismatch fails before any data is read), then one part at a time.
+    let m = merge_files(&a.parts)?;
     let mut extra = vec![
         ("illum.trace".to_string(), m.trace.clone()),
         ("illum.settings".into(), m.settings.clone()),
@@ -53,7 +42,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
             "illum.nonFiniteSamples".into(),
             m.non_finite_samples.to_string(),
         ),
-        ("illum.mergedParts".into(), parts.len().to_string()),
+        ("illum.mergedParts".into(), a.parts.len().to_string()),
     ];
     if m.clamped_samples > 0 {
         extra.push(("illum.clampedSamples".into(), m.clamped_samples.to_string()));
@@ -72,13 +61,12 @@ pub fn run(a: &MergeArgs) -> Result<()> {
     }
     if !a.quiet {
         eprintln!(
-            "illum: merged {} parts into {}x{} at {} spp in {:.2} s (reading {:.2} s); the parts rendered for {:.2} s after {:.2} s of set-up; wrote {}",
-            parts.len(),
+            "illum: merged {} parts into {}x{} at {} spp in {:.2} s; the parts rendered for {:.2} s after {:.2} s of set-up; wrote {}",
+            a.parts.len(),
             m.film.width,
             m.film.height,
             m.spp,
             start.elapsed().as_secs_f64(),
-            read_seconds,
             m.render_seconds,
             m.setup_seconds,
             exr_path.display()

@@ -137,46 +137,36 @@ pub fn write_partial(
     super::write_atomically(path, |tmp| image.write().to_file(tmp).map_err(write_err))
 }
 
-/// Reads a partial EXR written by [`write_partial`].
-pub fn read_partial(path: &Path) -> std::result::Result<(PartInfo, FilmSums), OutputError> {
-    let bad = |reason: String| OutputError::ExrUnsupported {
+type Res<T> = std::result::Result<T, OutputError>;
+
+fn unsupported(path: &Path, reason: String) -> OutputError {
+    OutputError::ExrUnsupported {
         path: path.to_path_buf(),
         reason,
-    };
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|cause| OutputError::ExrRead {
-            path: path.to_path_buf(),
-            cause,
-        })?;
-    let layer = image
-        .layer_data
-        .into_iter()
-        .next()
-        .ok_or_else(|| bad("no parts".into()))?;
-    let attr = |name: &str| -> std::result::Result<String, OutputError> {
-        match layer.attributes.other.get(&Text::from(name)) {
+    }
+}
+
+/// The job description in a partial EXR's header, checked against its data window `size`.
+fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> Res<PartInfo> {
+    let bad = |reason: String| unsupported(path, reason);
+    let attr = |name: &str| -> Res<String> {
+        match attributes.other.get(&Text::from(name)) {
             Some(AttributeValue::Text(t)) => Ok(t.to_string()),
             _ => Err(bad(format!(
-                "not a partial render of illum (no text attribute {name}; write one with illum render --samples or --crop)"
+                "not a partial render of illum (no text attribute {name}; write one with illum render --samples, --crop or --part)"
             ))),
         }
     };
     if attr("illum.partial")? != "1" {
         return Err(bad("illum.partial is not 1".into()));
     }
-    let parse_range = |name: &str| -> std::result::Result<(u32, u32), OutputError> {
+    let parse_range = |name: &str| -> Res<(u32, u32)> {
         let v = attr(name)?;
         v.split_once("..")
             .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
             .ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))
     };
-    let num = |name: &str| -> std::result::Result<f64, OutputError> {
+    let num = |name: &str| -> Res<f64> {
         let v = attr(name)?;
         v.parse()
             .map_err(|_| bad(format!("{name} = {v:?} is not a number")))
@@ -208,13 +198,61 @@ pub fn read_partial(path: &Path) -> std::result::Result<(PartInfo, FilmSums), Ou
         render_seconds: num("illum.renderSeconds")?,
         setup_seconds: num("illum.setupSeconds")?,
     };
-    let size = (window.width() as usize, window.height() as usize);
-    if layer.size != size.into() {
+    if size != Vec2(window.width() as usize, window.height() as usize) {
         return Err(bad(format!(
             "data window {}x{} does not match illum.crop {window}",
-            layer.size.0, layer.size.1
+            size.0, size.1
         )));
     }
+    Ok(info)
+}
+
+/// Reads only the job description of a partial EXR (its header), without its data.
+pub fn read_partial_info(path: &Path) -> Res<PartInfo> {
+    let meta = MetaData::read_from_file(path, false).map_err(|cause| OutputError::ExrRead {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| unsupported(path, "no parts".into()))?;
+    parse_info(path, &header.own_attributes, header.layer_size)
+}
+
+/// Reads a partial EXR written by [`write_partial`].
+pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
+    let bad = |reason: String| unsupported(path, reason);
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|cause| OutputError::ExrRead {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+    let layer = image
+        .layer_data
+        .into_iter()
+        .next()
+        .ok_or_else(|| bad("no parts".into()))?;
+    let info = parse_info(path, &layer.attributes, layer.size)?;
+    let window = info.window;
+    let attr = |name: &str| -> Option<String> {
+        match layer.attributes.other.get(&Text::from(name)) {
+            Some(AttributeValue::Text(t)) => Some(t.to_string()),
+            _ => None,
+        }
+    };
+    let parse_range = |name: &str| -> Res<(u32, u32)> {
+        let v = attr(name).ok_or_else(|| bad(format!("no attribute {name}")))?;
+        v.split_once("..")
+            .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
+            .ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))
+    };
     let n = window.pixels();
     let channel = |name: &str| {
         layer

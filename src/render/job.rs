@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::output::Film;
 use crate::output::partial::PartInfo;
 use crate::scene::Scene;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
 pub fn settings_text(s: &RenderSettings) -> String {
@@ -130,14 +130,20 @@ pub struct Merged {
     pub rays: u64,
 }
 
-fn part_error(p: &Part, field: &str, message: String) -> Error {
-    Error::Invalid(format!("{} ({field}): {message}", p.path.display()))
+/// A part's file and header: all that the checks need.
+pub struct PartHeader {
+    pub path: PathBuf,
+    pub info: PartInfo,
 }
 
-/// Checks that `parts` are the jobs of one image (same scene, seed, samples per pixel, settings
-/// and trace path; windows that tile the frame; per window, sample ranges that tile 0..spp) and
-/// adds them up exactly. Errors name the part and the field.
-pub fn merge(parts: &[Part]) -> Result<Merged> {
+fn part_error(path: &Path, field: &str, message: String) -> Error {
+    Error::Invalid(format!("{} ({field}): {message}", path.display()))
+}
+
+/// Checks that `parts` are the jobs of one image: same scene, seed, samples per pixel, settings,
+/// trace path and version; windows inside the frame; and in every cell cut by the windows'
+/// edges, sample ranges that tile 0..spp. Errors name the part and the field.
+pub fn check(parts: &[PartHeader]) -> Result<()> {
     let first = parts
         .first()
         .ok_or_else(|| Error::Invalid("illum merge: no parts given".into()))?;
@@ -164,7 +170,7 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
         for (field, got, want) in checks {
             if got != want {
                 return Err(part_error(
-                    p,
+                    &p.path,
                     field,
                     format!(
                         "{got} where {} has {want}: not a job of the same image",
@@ -180,14 +186,12 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
         let win = p.info.window;
         if win.x1 > w || win.y1 > h || win.x0 >= win.x1 || win.y0 >= win.y1 {
             return Err(part_error(
-                p,
+                &p.path,
                 "illum.crop",
                 format!("{win} is not a window of the {w}x{h} frame"),
             ));
         }
     }
-    // Coverage: cut the frame along every window's edges; in each cell, the parts whose window
-    // holds it must tile the samples 0..spp.
     let cuts = |lo: fn(&Window) -> u32, hi: fn(&Window) -> u32, end: u32| {
         let mut v: Vec<u32> = parts
             .iter()
@@ -208,7 +212,7 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
                 x1: x[1],
                 y1: y[1],
             };
-            let mut here: Vec<&Part> = parts
+            let mut here: Vec<&PartHeader> = parts
                 .iter()
                 .filter(|p| p.info.window.overlaps(&cell))
                 .collect();
@@ -219,7 +223,7 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
                 if a < next {
                     let q = here[k - 1];
                     return Err(part_error(
-                        p,
+                        &p.path,
                         "illum.samples, illum.crop",
                         format!(
                             "samples {a}..{b} of pixels {cell} overlaps samples {}..{} of {} (a part given twice, or from another split?)",
@@ -243,67 +247,147 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
             }
         }
     }
-    // Exact sums of the wholly owned blocks, then each shared block once per pixel (the jobs
-    // that share a block rendered it whole, so their copies must agree).
-    let mut sums = vec![[0i128; FILM_CHANNELS]; w as usize * h as usize];
-    let frame_index = |win: &Window, i: usize| {
-        let (x, y) = (
-            win.x0 + i as u32 % win.width(),
-            win.y0 + i as u32 / win.width(),
-        );
-        (y * w + x) as usize
-    };
-    for p in parts {
-        for (i, s) in p.sums.sums.iter().enumerate() {
-            let acc = &mut sums[frame_index(&p.info.window, i)];
-            for (a, x) in acc.iter_mut().zip(s) {
+    Ok(())
+}
+
+/// FNV-1a of a block's float32 sums at one pixel: what a later copy of the block is checked
+/// against, without keeping the first copy.
+fn pixel_hash(v: &[f32; FILM_CHANNELS]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for x in v {
+        for b in x.to_bits().to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
+/// Adds checked parts up one at a time, so that a merge holds one part in memory besides the
+/// frame's sums.
+struct Accumulator {
+    width: u32,
+    height: u32,
+    sums: Vec<[i128; FILM_CHANNELS]>,
+    /// Per pixel: the boundary blocks added so far (start, hash of the copy added, its part).
+    seen: Vec<Vec<(u32, u64, usize)>>,
+}
+
+impl Accumulator {
+    fn new(width: u32, height: u32) -> Accumulator {
+        let n = width as usize * height as usize;
+        Accumulator {
+            width,
+            height,
+            sums: vec![[0; FILM_CHANNELS]; n],
+            seen: vec![Vec::new(); n],
+        }
+    }
+
+    /// Adds part `index` (of `headers`): its owned blocks, and each shared block it has that no
+    /// earlier part added at that pixel (the jobs that share a block rendered it whole, so their
+    /// copies must agree).
+    fn add(&mut self, headers: &[PartHeader], index: usize, sums: &FilmSums) -> Result<()> {
+        let win = headers[index].info.window;
+        let w = self.width;
+        let at = |i: usize| {
+            let (x, y) = (
+                win.x0 + i as u32 % win.width(),
+                win.y0 + i as u32 / win.width(),
+            );
+            (y * w + x) as usize
+        };
+        for (i, s) in sums.sums.iter().enumerate() {
+            for (a, x) in self.sums[at(i)].iter_mut().zip(s) {
                 *a = a.saturating_add(*x);
             }
         }
-    }
-    // Per pixel: the blocks added so far, as (block start, part, block, index in that part).
-    let mut seen: Vec<Vec<(u32, usize, usize, usize)>> = vec![Vec::new(); sums.len()];
-    for (pi, p) in parts.iter().enumerate() {
-        for (bi, b) in p.sums.boundary.iter().enumerate() {
+        for b in &sums.boundary {
             for (i, v) in b.sums.iter().enumerate() {
-                let at = frame_index(&p.info.window, i);
-                if let Some(&(_, pj, bj, j)) = seen[at].iter().find(|s| s.0 == b.start) {
-                    if parts[pj].sums.boundary[bj].sums[j] != *v {
+                let px = at(i);
+                let hash = pixel_hash(v);
+                if let Some(&(_, h, q)) = self.seen[px].iter().find(|s| s.0 == b.start) {
+                    if h != hash {
                         return Err(part_error(
-                            p,
+                            &headers[index].path,
                             "block",
                             format!(
                                 "its samples {}..{} differ from those of {}",
                                 b.start,
                                 b.end,
-                                parts[pj].path.display()
+                                headers[q].path.display()
                             ),
                         ));
                     }
                     continue;
                 }
-                seen[at].push((b.start, pi, bi, i));
-                for (c, (a, x)) in sums[at].iter_mut().zip(v).enumerate() {
+                self.seen[px].push((b.start, hash, index));
+                for (c, (a, x)) in self.sums[px].iter_mut().zip(v).enumerate() {
                     *a = a.saturating_add(film::to_fixed(*x, c));
                 }
             }
         }
+        Ok(())
     }
-    let r = film::resolve(&sums, w, h, spp);
-    let mut devices: Vec<String> = parts.iter().map(|p| p.info.device.clone()).collect();
-    devices.sort();
-    devices.dedup();
-    Ok(Merged {
-        film: r.film,
-        spp,
-        seed: f.seed,
-        trace: f.trace.clone(),
-        settings: f.settings.clone(),
-        render_seconds: parts.iter().map(|p| p.info.render_seconds).sum(),
-        setup_seconds: parts.iter().map(|p| p.info.setup_seconds).sum(),
-        devices,
-        non_finite_samples: r.non_finite_samples,
-        clamped_samples: r.clamped_samples,
-        rays: r.rays,
-    })
+
+    fn finish(self, headers: &[PartHeader]) -> Merged {
+        let f = &headers[0].info;
+        let r = film::resolve(&self.sums, self.width, self.height, f.spp);
+        let mut devices: Vec<String> = headers.iter().map(|p| p.info.device.clone()).collect();
+        devices.sort();
+        devices.dedup();
+        Merged {
+            film: r.film,
+            spp: f.spp,
+            seed: f.seed,
+            trace: f.trace.clone(),
+            settings: f.settings.clone(),
+            render_seconds: headers.iter().map(|p| p.info.render_seconds).sum(),
+            setup_seconds: headers.iter().map(|p| p.info.setup_seconds).sum(),
+            devices,
+            non_finite_samples: r.non_finite_samples,
+            clamped_samples: r.clamped_samples,
+            rays: r.rays,
+        }
+    }
+}
+
+/// Checks that `parts` are the jobs of one image ([`check`]) and adds them up exactly.
+pub fn merge(parts: &[Part]) -> Result<Merged> {
+    let headers: Vec<PartHeader> = parts
+        .iter()
+        .map(|p| PartHeader {
+            path: p.path.clone(),
+            info: p.info.clone(),
+        })
+        .collect();
+    check(&headers)?;
+    let (w, h) = headers[0].info.frame;
+    let mut acc = Accumulator::new(w, h);
+    for (k, p) in parts.iter().enumerate() {
+        acc.add(&headers, k, &p.sums)?;
+    }
+    Ok(acc.finish(&headers))
+}
+
+/// [`merge`] of partial EXR files, reading their headers first (so a mismatch fails before any
+/// data is read) and then one part at a time.
+pub fn merge_files(paths: &[PathBuf]) -> Result<Merged> {
+    let mut headers = Vec::with_capacity(paths.len());
+    for path in paths {
+        headers.push(PartHeader {
+            path: path.clone(),
+            info: crate::output::partial::read_partial_info(path)?,
+        });
+    }
+    check(&headers)?;
+    let (w, h) = headers[0].info.frame;
+    let mut acc = Accumulator::new(w, h);
+    for (k, path) in paths.iter().enumerate() {
+        let (info, sums) = crate::output::partial::read_partial(path)?;
+        if info != headers[k].info {
+            return Err(part_error(path, "header", "changed while merging".into()));
+        }
+        acc.add(&headers, k, &sums)?;
+    }
+    Ok(acc.finish(&headers))
 }
