@@ -1,0 +1,248 @@
+//! Dome sampling: the tables of every map convention (src/gpu_scene/dome.rs) against independent
+//! f64 weights and chi-square tests of the GPU sampler, and the table builder's edge cases.
+
+use super::*;
+use glam::{DVec2, Vec3, Vec4};
+use illum::gpu_scene::dome;
+use illum::scene::{DomeConvention, dome_map};
+
+fn texture(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> Vec4) -> illum::scene::Texture {
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            texels.push(f(i, j));
+        }
+    }
+    illum::scene::Texture::new(name, w, h, texels)
+}
+
+/// Cell-aligned bins (`sub` × `sub` per sampling cell of src/render/dome.rs) in map coordinates:
+/// the sampler's density is constant in each, so the quadrature is exact.
+fn dome_domain(conv: DomeConvention, w: u32, h: u32, sub: usize, rot_deg: f64) -> Domain {
+    let (cw, ch) = dome::cells(conv, w, h);
+    let off = if conv == DomeConvention::Mitsuba {
+        0.5 / f64::from(w)
+    } else {
+        0.0
+    };
+    Domain {
+        to_dir: Box::new(move |x, y| {
+            let uv = DVec2::new((x + off).rem_euclid(1.0), y);
+            Some(dome_map::direction(conv, rot_deg, uv))
+        }),
+        from_dir: Box::new(move |d| {
+            let uv = dome_map::uv(conv, rot_deg, d);
+            Some(((uv.x - off).rem_euclid(1.0), uv.y))
+        }),
+        nx: cw as usize * sub,
+        ny: ch as usize * sub,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn dome_case(
+    g: &Lights,
+    name: &str,
+    tex: &illum::scene::Texture,
+    tint: Vec3,
+    rot_deg: f64,
+    conv: DomeConvention,
+    sub: usize,
+    seed: u32,
+) {
+    let table = dome::build(tex, tint, conv);
+    let data = g
+        .ctx
+        .upload(
+            "dome table",
+            &table.data(),
+            ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+        )
+        .unwrap();
+    let mut l = dome_light(rot_deg);
+    l.flags |= match conv {
+        DomeConvention::Illum => 0,
+        DomeConvention::Mitsuba => LIGHT_FLAG_DOME_MITSUBA,
+        DomeConvention::Pbrt => LIGHT_FLAG_DOME_PBRT,
+    };
+    let prm = LightParams {
+        dome: table.gpu(data.address),
+        light: l,
+        p: [0.0; 4],
+    };
+    let (w, h) = (tex.width, tex.height);
+    let (cw, ch) = dome::cells(conv, w, h);
+
+    // illum's table is the tent-filtered luminance times sin(theta), normalised (independent f64
+    // check of the builder).
+    if conv == DomeConvention::Illum {
+        let lum = |i: i64, j: i64| {
+            let t =
+                tex.texels[(j.rem_euclid(h as i64) * w as i64 + i.rem_euclid(w as i64)) as usize];
+            dome::luminance(tint * t.truncate()).max(0.0)
+        };
+        let k = [0.125, 0.75, 0.125];
+        let mut weights = vec![0.0; (w * h) as usize];
+        for j in 0..h as i64 {
+            for i in 0..w as i64 {
+                let mut s = 0.0;
+                for b in 0..3 {
+                    for a in 0..3 {
+                        s += k[a] * k[b] * lum(i + a as i64 - 1, j + b as i64 - 1);
+                    }
+                }
+                weights[(j * w as i64 + i) as usize] = s * (PI * (j as f64 + 0.5) / h as f64).sin();
+            }
+        }
+        let total: f64 = weights.iter().sum();
+        for j in 0..h {
+            for i in 0..w {
+                let p = table.texel_probability(i, j);
+                let q = weights[(j * w + i) as usize] / total;
+                // float32 CDFs: absolute error of a difference of two entries <= 2 ulp(1).
+                assert!(
+                    (p - q).abs() <= 1e-6 * q + 2.4e-7,
+                    "{name}: texel ({i}, {j}): table {p} vs {q}"
+                );
+            }
+        }
+    }
+    // The GPU pdf at cell centres is the table's probability over the cell's solid angle.
+    let off = if conv == DomeConvention::Mitsuba {
+        0.5 / f64::from(w)
+    } else {
+        0.0
+    };
+    let mut centres = Vec::new();
+    for j in 0..ch {
+        for i in 0..cw {
+            let uv = DVec2::new(
+                ((f64::from(i) + 0.5) / f64::from(cw) + off).rem_euclid(1.0),
+                (f64::from(j) + 0.5) / f64::from(ch),
+            );
+            let (dir, jacobian) = dome_map::direction(conv, rot_deg, uv);
+            let pdf = table.texel_probability(i, j) * f64::from(cw * ch) / jacobian;
+            centres.push((f4(dir, 0.0), pdf));
+        }
+    }
+    let dirs: Vec<[f32; 4]> = centres.iter().map(|c| c.0).collect();
+    let hits = g.hit(&prm, &dirs);
+    for ((_, expected), got) in centres.iter().zip(&hits) {
+        let got = f64::from(got[0]);
+        assert!(
+            (got - expected).abs() <= 1e-4 * expected + 1e-12,
+            "{name}: GPU pdf {got} vs table {expected}"
+        );
+    }
+    // Samples on a cell boundary (to float precision) may be attributed to the neighbour by pdf().
+    // `ambiguous` gets the sample's map coordinates.
+    let ambiguous = move |(u, v): (f64, f64)| {
+        let near = |x: f64| (x - x.round()).abs() < 1e-4;
+        near((u - off).rem_euclid(1.0) * f64::from(cw)) || near(v * f64::from(ch))
+    };
+    g.check(
+        name,
+        &prm,
+        &dome_domain(conv, w, h, sub, rot_deg),
+        seed,
+        &ambiguous,
+    );
+    drop(data);
+}
+
+#[test]
+fn chi2_dome() {
+    let g = Lights::new();
+    // One hot texel over a dim background.
+    let hot = texture("hot", 32, 16, |i, j| {
+        if (i, j) == (21, 5) {
+            Vec4::new(2000.0, 1500.0, 1000.0, 1.0)
+        } else {
+            Vec4::new(0.1, 0.1, 0.1, 1.0)
+        }
+    });
+    dome_case(
+        &g,
+        "dome hot pixel",
+        &hot,
+        Vec3::ONE,
+        30.0,
+        DomeConvention::Illum,
+        2,
+        60,
+    );
+    dome_case(
+        &g,
+        "Mitsuba dome hot pixel",
+        &hot,
+        Vec3::ONE,
+        30.0,
+        DomeConvention::Mitsuba,
+        2,
+        63,
+    );
+    // A smooth sky: brighter toward the zenith and toward one azimuth, tinted.
+    let sky = texture("sky", 64, 32, |i, j| {
+        let theta = PI * (f64::from(j) + 0.5) / 32.0;
+        let phi = 2.0 * PI * (f64::from(i) + 0.5) / 64.0;
+        let s = 0.2 + (0.5 * theta).cos().powi(4) * (1.5 + phi.cos());
+        Vec4::new(0.6 * s as f32, 0.8 * s as f32, s as f32, 1.0)
+    });
+    dome_case(
+        &g,
+        "dome sky",
+        &sky,
+        Vec3::new(1.0, 0.9, 0.7),
+        -75.0,
+        DomeConvention::Illum,
+        1,
+        61,
+    );
+    // pbrt's equal-area square: a hot texel near a crease of the octahedral map, over a gradient.
+    let square = texture("square", 16, 16, |i, j| {
+        if (i, j) == (10, 4) {
+            Vec4::new(800.0, 800.0, 800.0, 1.0)
+        } else {
+            let g = 0.2 + 0.05 * f64::from(i + j);
+            Vec4::new(g as f32, g as f32, g as f32, 1.0)
+        }
+    });
+    dome_case(
+        &g,
+        "pbrt dome",
+        &square,
+        Vec3::ONE,
+        20.0,
+        DomeConvention::Pbrt,
+        2,
+        64,
+    );
+    // No table: uniform over the sphere.
+    let prm = params(dome_light(0.0), DVec3::ZERO);
+    g.check(
+        "dome uniform",
+        &prm,
+        &Domain::cone(DVec3::Y, 2.0, 16, 32),
+        62,
+        &never,
+    );
+    g.finish();
+}
+
+#[test]
+fn dome_table_builder() {
+    // All-black map: uniform in solid angle (sin theta per row), still a valid pdf.
+    let black = texture("black", 8, 4, |_, _| Vec4::ZERO);
+    let t = dome::build(&black, Vec3::ONE, DomeConvention::Illum);
+    assert_eq!(t.marginal.len(), 5);
+    assert_eq!(*t.marginal.last().unwrap(), 1.0);
+    let sum: f64 = (0..4)
+        .flat_map(|j| (0..8).map(move |i| (i, j)))
+        .map(|(i, j)| t.texel_probability(i, j))
+        .sum();
+    assert!((sum - 1.0).abs() < 1e-6);
+    // A zero row of the tint's channels: a red-only texture under a blue tint is black.
+    let red = texture("red", 8, 4, |_, _| Vec4::new(1.0, 0.0, 0.0, 1.0));
+    let t2 = dome::build(&red, Vec3::new(0.0, 0.0, 1.0), DomeConvention::Illum);
+    assert_eq!(t2.marginal, t.marginal);
+}
