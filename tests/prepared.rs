@@ -29,6 +29,12 @@ fn a_prepared_scene_renders_again_uploading_only_its_frame_constants() {
     let r = Renderer::new(ctx.clone());
     let prepared = r.prepare(&scene, trace_mode()).unwrap();
     r.loop_limited().unwrap(); // the driver probe, once per renderer, uploads its own buffer
+    let kernels = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let k = kernels.clone();
+    ctx.set_kernel_listener(Some(std::sync::Arc::new(move |_: &str| {
+        k.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    })));
+    let created = || kernels.load(std::sync::atomic::Ordering::SeqCst);
     let counts = || ctx.upload_counts();
     let before = counts();
     let a = r
@@ -39,6 +45,12 @@ fn a_prepared_scene_renders_again_uploading_only_its_frame_constants() {
         .render_prepared(&prepared, &scene.camera, &settings(8), &[2], &mut |_, _| {})
         .unwrap();
     let after_b = counts();
+    // Two renders, one kernel: the second reuses the pipeline the first created.
+    assert_eq!(
+        created(),
+        1,
+        "kernels created by two renders of the prepared scene"
+    );
     let frame = std::mem::size_of::<Frame>() as u64;
     for (what, (n0, b0), (n1, b1)) in [("first", before, after_a), ("second", after_a, after_b)] {
         assert_eq!(
@@ -53,6 +65,7 @@ fn a_prepared_scene_renders_again_uploading_only_its_frame_constants() {
         .unwrap();
     assert_eq!(a[0].film, fresh[0].film);
     assert_eq!(b[0].film, fresh[1].film);
+    ctx.set_kernel_listener(None);
     assert_ne!(a[0].film.beauty, b[0].film.beauty);
     assert_no_validation_messages(&ctx);
 }

@@ -96,6 +96,13 @@ impl Integrator for Direct {
 }
 
 impl IntegratorPasses for PrimaryKernel {
+    fn bind(&self, frame: &Buffer, film: &Buffer) {
+        self.pipeline
+            .bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
+        self.pipeline
+            .bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, film);
+    }
+
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
         PrimaryKernel::record(self, cmd, pass);
     }

@@ -25,8 +25,11 @@ pub trait Integrator {
     ) -> Result<Box<dyn IntegratorPasses>>;
 }
 
-/// An integrator's kernels for one render.
+/// An integrator's kernels. A prepared scene keeps them between renders; each render binds its
+/// own frame constants and film first.
 pub trait IntegratorPasses {
+    /// Points the kernels at a render's frame constants and film.
+    fn bind(&self, frame: &Buffer, film: &Buffer);
     /// Records what adds samples [first_sample, first_sample + sample_count) of the pixels in
     /// `pass.tile` to the film (dispatches and the barriers between them).
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants);

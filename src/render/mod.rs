@@ -227,7 +227,13 @@ impl Renderer {
                     .cmd_fill_buffer(cmd, film_buffer.buffer, 0, vk::WHOLE_SIZE, 0)
             }
         })?;
-        let kernel = integrator.kernels(ctx, prepared, &frame, &film_buffer)?;
+        let kernel = match prepared.take_kernels(integrator.name()) {
+            Some(k) => {
+                k.bind(&frame, &film_buffer);
+                k
+            }
+            None => integrator.kernels(ctx, prepared, &frame, &film_buffer)?,
+        };
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
 
@@ -416,6 +422,7 @@ impl Renderer {
                 break;
             }
         }
+        prepared.keep_kernels(integrator.name(), kernel);
         Ok(outputs)
     }
 }

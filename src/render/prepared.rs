@@ -2,10 +2,12 @@
 //! any number of renders (other settings, seeds, sample ranges, a moved camera).
 
 use super::Renderer;
+use super::integrator::IntegratorPasses;
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::scene::{Camera, Scene};
 use crate::trace::{BuildStats, TraceMode, TraceStructure};
+use std::cell::RefCell;
 use std::time::Instant;
 
 pub struct PreparedScene {
@@ -16,9 +18,22 @@ pub struct PreparedScene {
     /// Wall time of the upload and of the trace structure's build.
     pub upload_seconds: f64,
     pub build: BuildStats,
+    /// Kernels of the integrators that rendered it, by name: pipelines are created once.
+    kernels: RefCell<Vec<(&'static str, Box<dyn IntegratorPasses>)>>,
 }
 
 impl PreparedScene {
+    /// The kernels of integrator `name` created by an earlier render, if any.
+    pub(super) fn take_kernels(&self, name: &str) -> Option<Box<dyn IntegratorPasses>> {
+        let mut k = self.kernels.borrow_mut();
+        let at = k.iter().position(|(n, _)| *n == name)?;
+        Some(k.swap_remove(at).1)
+    }
+
+    pub(super) fn keep_kernels(&self, name: &'static str, kernels: Box<dyn IntegratorPasses>) {
+        self.kernels.borrow_mut().push((name, kernels));
+    }
+
     /// The trace path the structure was built for ("rayquery" or "bvh").
     pub fn trace_name(&self) -> &'static str {
         self.trace.name()
@@ -40,6 +55,7 @@ impl Renderer {
             trace,
             camera: scene.camera.clone(),
             upload_seconds,
+            kernels: RefCell::new(Vec::new()),
         })
     }
 }
