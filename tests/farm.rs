@@ -12,13 +12,7 @@ use illum::render::{RenderSettings, Renderer};
 use std::path::Path;
 
 /// 13x9 pixels, 600 samples: blocks 0..256, 256..512 and a short 512..600.
-const SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 0], "fov_y": 40, "resolution": [13, 9]},
-    "materials": {"floor": {"diffuse": [0.6, 0.6, 0.6], "specular": [{"model": "ggx", "roughness": 0.2}]},
-                  "ball": {"diffuse": [0.7, 0.3, 0.2]}},
-    "shapes": {"floor": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"},
-               "ball": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "ball"}},
-    "lights": {"key": {"rect": {"center": [1, 2, 1], "normal": [-0.4, -1, -0.4], "size": [0.8, 0.8]}, "intensity": 6},
-               "sky": {"dome": {}, "color": [0.2, 0.3, 0.4]}}}"#;
+const SCENE: &str = SMALL_SCENE;
 const SPP: u32 = 600;
 
 /// N = 1, 2, 4, 7 by samples (3 blocks: N = 2 does not divide them, N = 4 and 7 split blocks into
@@ -70,18 +64,6 @@ fn parts_merge_bit_identical_whatever_n() {
         }
     }
     assert_no_validation_messages(&ctx);
-}
-
-fn illum_cli(args: &[&str]) -> (i32, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_illum"))
-        .args(args)
-        .env("ILLUM_VALIDATION", "1")
-        .output()
-        .expect("running illum");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 /// Every channel of two EXRs, bit for bit; panics naming the first channel and pixel that differ.

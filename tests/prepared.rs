@@ -6,13 +6,7 @@ use common::*;
 use illum::layout::Frame;
 use illum::render::{RenderSettings, Renderer};
 
-const SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 0], "fov_y": 40, "resolution": [16, 12]},
-    "materials": {"floor": {"diffuse": [0.6, 0.6, 0.6], "specular": [{"model": "ggx", "roughness": 0.2}]},
-                  "ball": {"diffuse": [0.7, 0.3, 0.2]}},
-    "shapes": {"floor": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"},
-               "ball": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "ball"}},
-    "lights": {"key": {"rect": {"center": [1, 2, 1], "normal": [-0.4, -1, -0.4], "size": [0.8, 0.8]}, "intensity": 6},
-               "sky": {"dome": {}, "color": [0.2, 0.3, 0.4]}}}"#;
+const SCENE: &str = SMALL_SCENE;
 
 fn settings(spp: u32) -> RenderSettings {
     RenderSettings {

@@ -224,3 +224,26 @@ pub fn assert_matches_expectation(b: &Batches, expected: impl Fn(usize) -> [f64;
         );
     }
 }
+
+/// A small scene for the render-core tests (jobs, farm, prepared scenes): a glossy floor, a
+/// diffuse ball, a rect light and a dome, at 13x9 pixels (odd sizes on purpose).
+pub const SMALL_SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 0], "fov_y": 40, "resolution": [13, 9]},
+    "materials": {"floor": {"diffuse": [0.6, 0.6, 0.6], "specular": [{"model": "ggx", "roughness": 0.2}]},
+                  "ball": {"diffuse": [0.7, 0.3, 0.2]}},
+    "shapes": {"floor": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [6, 6]}, "material": "floor"},
+               "ball": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "ball"}},
+    "lights": {"key": {"rect": {"center": [1, 2, 1], "normal": [-0.4, -1, -0.4], "size": [0.8, 0.8]}, "intensity": 6},
+               "sky": {"dome": {}, "color": [0.2, 0.3, 0.4]}}}"#;
+
+/// Runs the illum binary with validation on: (exit code, stderr).
+pub fn illum_cli(args: &[&str]) -> (i32, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_illum"))
+        .args(args)
+        .env("ILLUM_VALIDATION", "1")
+        .output()
+        .expect("running illum");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
