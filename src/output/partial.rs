@@ -139,6 +139,12 @@ pub fn write_partial(
 
 type Res<T> = std::result::Result<T, OutputError>;
 
+/// "A..B" as (A, B).
+fn range_text(v: &str) -> Option<(u32, u32)> {
+    let (a, b) = v.split_once("..")?;
+    Some((a.parse().ok()?, b.parse().ok()?))
+}
+
 fn unsupported(path: &Path, reason: String) -> OutputError {
     OutputError::ExrUnsupported {
         path: path.to_path_buf(),
@@ -162,9 +168,7 @@ fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> R
     }
     let parse_range = |name: &str| -> Res<(u32, u32)> {
         let v = attr(name)?;
-        v.split_once("..")
-            .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
-            .ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))
+        range_text(&v).ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))
     };
     let num = |name: &str| -> Res<f64> {
         let v = attr(name)?;
@@ -247,12 +251,6 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
             _ => None,
         }
     };
-    let parse_range = |name: &str| -> Res<(u32, u32)> {
-        let v = attr(name).ok_or_else(|| bad(format!("no attribute {name}")))?;
-        v.split_once("..")
-            .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
-            .ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))
-    };
     let n = window.pixels();
     let channel = |name: &str| {
         layer
@@ -275,9 +273,12 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
         }
     }
     for k in 0..2 {
-        let Ok(range) = parse_range(&format!("illum.block{k}")) else {
+        // No attribute: the job has no such block; a malformed one is an error, not a skip.
+        let name = format!("illum.block{k}");
+        let Some(v) = attr(&name) else {
             continue;
         };
+        let range = range_text(&v).ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))?;
         let mut block = BoundaryBlock {
             start: range.0,
             end: range.1,

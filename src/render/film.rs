@@ -132,13 +132,16 @@ impl FilmSums {
     }
 
     /// The sums with the boundary blocks added: every sample this job rendered.
-    pub fn with_boundary(&self) -> Vec<[i128; FILM_CHANNELS]> {
-        let mut all = FilmSums::new(self.window);
-        all.sums.clone_from(&self.sums);
+    pub fn with_boundary(&self) -> FilmSums {
+        let mut all = FilmSums {
+            window: self.window,
+            sums: self.sums.clone(),
+            boundary: Vec::new(),
+        };
         for b in &self.boundary {
             all.add_block(&b.sums);
         }
-        all.sums
+        all
     }
 }
 

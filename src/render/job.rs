@@ -29,6 +29,10 @@ pub fn settings_text(s: &RenderSettings) -> String {
 struct Fnv(u64);
 
 impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+
     fn write(&mut self, bytes: &[u8]) {
         for b in bytes {
             self.0 = (self.0 ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3);
@@ -40,7 +44,7 @@ impl Fnv {
 /// lights, textures, camera), as 16 hex digits; the scene's file name and description are left
 /// out, so a copied scene file on another machine hashes the same.
 pub fn scene_hash(scene: &Scene) -> String {
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let mut h = Fnv::new();
     h.write(format!("{:?}", scene.camera).as_bytes());
     h.write(format!("{:?}", scene.materials).as_bytes());
     h.write(format!("{:?}", scene.shapes).as_bytes());
@@ -253,13 +257,9 @@ pub fn check(parts: &[PartHeader]) -> Result<()> {
 /// FNV-1a of a block's float32 sums at one pixel: what a later copy of the block is checked
 /// against, without keeping the first copy.
 fn pixel_hash(v: &[f32; FILM_CHANNELS]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for x in v {
-        for b in x.to_bits().to_le_bytes() {
-            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    h
+    let mut h = Fnv::new();
+    h.write(bytemuck::cast_slice(v));
+    h.0
 }
 
 /// Adds checked parts up one at a time, so that a merge holds one part in memory besides the

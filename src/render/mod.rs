@@ -365,8 +365,7 @@ impl Renderer {
                 };
                 if evaluate {
                     // Reads the unfinished block without moving it: the block grid stays fixed.
-                    let mut peek = FilmSums::new(window);
-                    peek.sums = sums.with_boundary();
+                    let mut peek = sums.with_boundary();
                     if (first + done) % FILM_BLOCK != 0 && first + done != last {
                         peek.add_block(&film::download_window(ctx, &film_buffer, w, window)?);
                     }
@@ -386,7 +385,12 @@ impl Renderer {
             }
             let resolved = match last_resolved {
                 Some(r) if r.spp == done => r,
-                _ => film::resolve(&sums.with_boundary(), window.width(), window.height(), done),
+                _ => film::resolve(
+                    &sums.with_boundary().sums,
+                    window.width(),
+                    window.height(),
+                    done,
+                ),
             };
             if !evaluate && let Some(p) = passes.last_mut() {
                 evaluate_pass(p, &resolved, settings.reference.as_deref());
