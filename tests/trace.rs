@@ -211,6 +211,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
             }),
         ],
         description: None,
+        integrator: Default::default(),
         source: None,
     }
 }

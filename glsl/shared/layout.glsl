@@ -16,6 +16,8 @@
 #define BINDING_FILM 1
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
+// The AOV planes an integrator declares: vec4 per (pixel, plane), at pixel * planes + plane.
+#define BINDING_AOVS 4
 
 // Specialization constants.
 #define SPEC_FEATURES 0
@@ -105,6 +107,11 @@
 // Frame.integrator_flags: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
 // course lights diffuse with light samples only).
 #define INTEGRATOR_DIFFUSE_MIS 1
+// Radiosity cache (src/render/indirect/radiosity.rs): a world-space hashed grid. Lookups probe at
+// most RADIOSITY_PROBES consecutive entries; each update record names its cell at
+// RADIOSITY_RECORD_KEYS levels (the footprint's, then the next coarser ones).
+#define RADIOSITY_PROBES 16
+#define RADIOSITY_RECORD_KEYS 3
 
 // Hit kinds reported by the trace interface.
 #define HIT_NONE 0
@@ -164,6 +171,13 @@ struct Frame {
                               // lighting (0: off; biased when on)
     uint nan_every;           // test hook: every n-th sample is NaN (0: off)
     uint pad;
+    uint max_depth;           // path integrator: most path segments (NONE: unbounded)
+    uint specular_depth;      // full integrator: most specular bounces of the reflection part
+    uint64_t radiosity_table; // RadiosityEntry array of the radiosity cache (0: no cache)
+    uint radiosity_mask;      // entries - 1 (a power of two)
+    uint radiosity_levels;    // cell edges radiosity_cell * 2^l, l < radiosity_levels
+    float radiosity_cell;     // finest cell edge (scene units)
+    float diffuse_spread;     // ray-cone spread angle a diffuse bounce adds (radians)
 };
 
 // Per-dispatch constants.
@@ -363,6 +377,38 @@ struct QueryConstants {
     uint64_t hits;        // QueryHit array
     uint count;           // rays in this dispatch
     uint mode;            // QUERY_*
+};
+
+// An entry of the radiosity cache's table: a cell's key (two independent 32-bit hashes of its
+// grid coordinates, level and normal octant; key.y == 0 marks an empty slot) and its mean
+// outgoing diffuse radiance B = rho / pi * E.
+struct RadiosityEntry {
+    vec3 value;
+    uint count;               // update samples behind the value
+    uvec2 key;
+    uvec2 pad;
+};
+
+// One update sample of the radiosity cache (glsl/indirect/radiosity_update.comp): B at a point,
+// filed under the keys of its cell at RADIOSITY_RECORD_KEYS levels.
+struct RadiosityRecord {
+    vec3 value;
+    uint valid;               // 0: no sample (the path ended earlier)
+    uvec2 keys[3];
+    uvec2 pad;
+};
+
+// Push constants of glsl/indirect/radiosity_update.comp.
+struct RadiosityPass {
+    uint64_t records;         // RadiosityRecord array
+    uint index;               // update index: the sample index it belongs to, or a warm-up round
+    uint rounds;              // consecutive indices in this dispatch (gl_GlobalInvocationID.y)
+    uint seed_lo;
+    uint seed_hi;
+    uint paths;               // update paths per index
+    uint vertices;            // records per path
+    uint block;               // one path per block x block pixels
+    uint pad0;
 };
 
 #define QUERY_CLOSEST 1

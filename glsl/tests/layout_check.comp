@@ -24,6 +24,9 @@ layout(scalar, binding = 15) buffer B15 { QueryHit query_hit_v[]; };
 layout(scalar, binding = 16) buffer B16 { QueryConstants query_constants_v[]; };
 layout(scalar, binding = 17) buffer B17 { GpuDomeSampling dome_sampling_v[]; };
 layout(scalar, binding = 18) buffer B18 { GpuLightNode light_node_v[]; };
+layout(scalar, binding = 19) buffer B19 { RadiosityEntry radiosity_entry_v[]; };
+layout(scalar, binding = 20) buffer B20 { RadiosityRecord radiosity_record_v[]; };
+layout(scalar, binding = 21) buffer B21 { RadiosityPass radiosity_pass_v[]; };
 void main() {
     uint i = gl_GlobalInvocationID.x;
     frame_v[i + 1] = frame_v[i];
@@ -45,4 +48,7 @@ void main() {
     query_ray_v[i + 1] = query_ray_v[i];
     query_hit_v[i + 1] = query_hit_v[i];
     query_constants_v[i + 1] = query_constants_v[i];
+    radiosity_entry_v[i + 1] = radiosity_entry_v[i];
+    radiosity_record_v[i + 1] = radiosity_record_v[i];
+    radiosity_pass_v[i + 1] = radiosity_pass_v[i];
 }

@@ -84,7 +84,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     let mut rows: Vec<(Technique, RenderOutput)> = Vec::new();
     for (&t, exr) in a.techniques.iter().zip(&exrs) {
         let settings = RenderSettings {
-            integrator: a.integrator.settings(t),
+            integrator: a.integrator.settings(t, &scene),
             spp: 1 << 20,
             time: Some(a.time),
             seed: a.seed,

@@ -133,14 +133,47 @@ pub struct IntegratorArgs {
     /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
     #[arg(long)]
     pub diffuse_mis: bool,
+    /// direct: direct lighting only; full: direct + indirect diffuse through the radiosity cache
+    /// + reflections (caustics left out); path: brute-force path tracer (all light paths).
+    /// [default: the scene's "integrator", else direct]
+    #[arg(long)]
+    pub integrator: Option<crate::render::IntegratorKind>,
+    /// path: the most path segments, as Mitsuba's max_depth (1: emission seen directly, 2: direct
+    /// lighting, -1: unbounded). [default: the scene's, else -1]
+    #[arg(long, allow_hyphen_values = true)]
+    pub max_depth: Option<i32>,
+    /// full: the most specular bounces of the reflection integrator, 0 to 64. [default: the
+    /// scene's, else 4]
+    #[arg(long)]
+    pub specular_depth: Option<u32>,
+    /// full: indirect diffuse through the radiosity cache (on) or by brute force (off), to
+    /// measure the cache's bias and gain. [default: the scene's, else on]
+    #[arg(long, value_parser = ["on", "off"])]
+    pub radiosity_cache: Option<String>,
 }
 
 impl IntegratorArgs {
+    /// The settings: these options, else the scene's `integrator` section, else the defaults.
     pub fn settings(
         &self,
         technique: crate::render::Technique,
+        scene: &Scene,
     ) -> crate::render::IntegratorSettings {
+        let d = crate::render::IntegratorSettings::default();
+        let c = &scene.integrator;
         crate::render::IntegratorSettings {
+            kind: self.integrator.or(c.kind).unwrap_or(d.kind),
+            max_depth: self.max_depth.or(c.max_depth).unwrap_or(d.max_depth),
+            specular_depth: self
+                .specular_depth
+                .or(c.specular_depth)
+                .unwrap_or(d.specular_depth),
+            radiosity_cache: self
+                .radiosity_cache
+                .as_deref()
+                .map(|v| v == "on")
+                .or(c.radiosity_cache)
+                .unwrap_or(d.radiosity_cache),
             technique,
             light_samples: self.light_samples,
             brdf_samples: self.brdf_samples,
@@ -187,6 +220,7 @@ pub fn image_metadata(
     let last = out.passes.last().cloned().unwrap_or_default();
     let mut extra = vec![
         ("illum.trace".to_string(), s.trace.to_string()),
+        ("illum.integrator".into(), it.kind.name().into()),
         ("illum.technique".into(), it.technique.name().into()),
         ("illum.lightSamples".into(), it.light_samples.to_string()),
         ("illum.brdfSamples".into(), it.brdf_samples.to_string()),
@@ -202,6 +236,9 @@ pub fn image_metadata(
     ];
     if let Some(e) = last.estimated_relmse {
         extra.push(("illum.estimatedRelMSE".into(), format!("{e:.6e}")));
+    }
+    for (name, value) in &s.integrator {
+        extra.push((format!("illum.{name}"), value.clone()));
     }
     if let Some(c) = settings.clamp {
         extra.push(("illum.fireflyClamp".into(), format!("{c} (biased)")));

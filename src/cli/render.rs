@@ -144,7 +144,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         (None, None) => 16,
     };
     let settings = RenderSettings {
-        integrator: a.integrator.settings(a.technique),
+        integrator: a.integrator.settings(a.technique, &scene),
         spp,
         time: a.time,
         seed: a.seed,
@@ -354,6 +354,9 @@ fn summary(
         s.non_finite_samples,
         written,
     );
+    for (name, value) in &s.integrator {
+        eprintln!("illum: {name}: {value}");
+    }
     let mut line = format!(
         "illum: {} spp, {:.3} s rendering ({:.3} s on the device)",
         last.spp, last.wall_seconds, last.device_seconds
@@ -437,7 +440,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
     })?;
     let renderer = Renderer::new(ctx.clone());
     let settings = RenderSettings {
-        integrator: a.integrator.settings(a.technique),
+        integrator: a.integrator.settings(a.technique, &scene),
         spp,
         seed: a.seed,
         trace: a.trace,

@@ -5,10 +5,8 @@
 use super::integrator::{Integrator, IntegratorPasses};
 use super::{IntegratorSettings, PreparedScene, Technique};
 use crate::error::Result;
-use crate::gpu_scene::GpuScene;
 use crate::layout::*;
 use crate::shaders;
-use crate::trace::TraceStructure;
 use crate::vk::{Buffer, ComputePipeline, Context};
 use ash::vk;
 
@@ -17,40 +15,15 @@ pub struct PrimaryKernel {
 }
 
 impl PrimaryKernel {
-    pub fn new(
-        ctx: &Context,
-        scene: &GpuScene,
-        trace: &TraceStructure,
-        frame: &Buffer,
-        film: &Buffer,
-    ) -> Result<PrimaryKernel> {
-        let mut bindings = vec![
-            (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER),
-            (BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER),
-        ];
-        bindings.extend(trace.bindings());
-        let pipeline = ComputePipeline::new(
+    pub fn new(ctx: &Context, scene: &PreparedScene) -> Result<PrimaryKernel> {
+        let pipeline = film_pipeline(
             ctx,
+            scene,
             "primary",
-            trace.select(shaders::PRIMARY_RQ, shaders::PRIMARY_BVH),
-            &bindings,
-            std::mem::size_of::<PassConstants>() as u32,
-            &[scene.features],
+            (shaders::PRIMARY_RQ, shaders::PRIMARY_BVH),
+            false,
         )?;
-        pipeline.bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
-        pipeline.bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, film);
-        trace.bind(&pipeline);
         Ok(PrimaryKernel { pipeline })
-    }
-
-    pub fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
-        let groups = [
-            pass.tile[2].div_ceil(WORKGROUP_X),
-            pass.tile[3].div_ceil(WORKGROUP_Y),
-            1,
-        ];
-        self.pipeline
-            .dispatch(cmd, bytemuck::bytes_of(pass), groups);
     }
 }
 
@@ -63,47 +36,84 @@ impl Integrator for Direct {
     }
 
     fn configure(&self, frame: &mut Frame) {
-        let it = &self.0;
-        frame.technique = match it.technique {
-            Technique::Brdf => TECHNIQUE_BRDF,
-            Technique::Light => TECHNIQUE_LIGHT,
-            Technique::Mis => TECHNIQUE_MIS,
-        };
-        frame.light_samples = it.light_samples;
-        frame.brdf_samples = it.brdf_samples;
-        frame.integrator_flags = if it.diffuse_mis {
-            INTEGRATOR_DIFFUSE_MIS
-        } else {
-            0
-        };
+        configure_direct(&self.0, frame);
     }
 
-    fn kernels(
-        &self,
-        ctx: &Context,
-        scene: &PreparedScene,
-        frame: &Buffer,
-        film: &Buffer,
-    ) -> Result<Box<dyn IntegratorPasses>> {
-        Ok(Box::new(PrimaryKernel::new(
-            ctx,
-            &scene.gpu,
-            &scene.trace,
-            frame,
-            film,
-        )?))
+    fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
+        Ok(Box::new(PrimaryKernel::new(ctx, scene)?))
     }
 }
 
 impl IntegratorPasses for PrimaryKernel {
-    fn bind(&self, frame: &Buffer, film: &Buffer) {
-        self.pipeline
-            .bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
-        self.pipeline
-            .bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, film);
+    fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
+        bind_film(&self.pipeline, frame, film, aovs);
     }
 
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
-        PrimaryKernel::record(self, cmd, pass);
+        dispatch_tile(&self.pipeline, cmd, pass);
     }
+}
+
+/// The direct-lighting settings every integrator shares (its camera hits are lit the same way).
+pub fn configure_direct(it: &IntegratorSettings, frame: &mut Frame) {
+    frame.technique = match it.technique {
+        Technique::Brdf => TECHNIQUE_BRDF,
+        Technique::Light => TECHNIQUE_LIGHT,
+        Technique::Mis => TECHNIQUE_MIS,
+    };
+    frame.light_samples = it.light_samples;
+    frame.brdf_samples = it.brdf_samples;
+    frame.integrator_flags = if it.diffuse_mis {
+        INTEGRATOR_DIFFUSE_MIS
+    } else {
+        0
+    };
+}
+
+/// A kernel over film pixels (frame constants, film, the AOV planes if `aovs`, the trace
+/// structure), with the scene's feature switches.
+pub fn film_pipeline(
+    ctx: &Context,
+    scene: &PreparedScene,
+    name: &str,
+    (rq, bvh): (&'static [u8], &'static [u8]),
+    aovs: bool,
+) -> Result<ComputePipeline> {
+    let mut bindings = vec![
+        (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER),
+        (BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER),
+    ];
+    if aovs {
+        bindings.push((BINDING_AOVS, vk::DescriptorType::STORAGE_BUFFER));
+    }
+    bindings.extend(scene.trace.bindings());
+    let pipeline = ComputePipeline::new(
+        ctx,
+        name,
+        scene.trace.select(rq, bvh),
+        &bindings,
+        std::mem::size_of::<PassConstants>() as u32,
+        &[scene.gpu.features],
+    )?;
+    scene.trace.bind(&pipeline);
+    Ok(pipeline)
+}
+
+/// Points a film kernel at a render's buffers.
+pub fn bind_film(pipeline: &ComputePipeline, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
+    pipeline.bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
+    pipeline.bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, film);
+    if let Some(a) = aovs {
+        pipeline.bind_buffer(BINDING_AOVS, vk::DescriptorType::STORAGE_BUFFER, a);
+    }
+}
+
+/// Dispatches a film kernel over the pixels of `pass.tile`.
+pub fn dispatch_tile(pipeline: &ComputePipeline, cmd: vk::CommandBuffer, pass: &PassConstants) {
+    let groups = [
+        pass.tile[2].div_ceil(WORKGROUP_X),
+        pass.tile[3].div_ceil(WORKGROUP_Y),
+        1,
+    ];
+    pipeline.dispatch(cmd, bytemuck::bytes_of(pass), groups);
 }

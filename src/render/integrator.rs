@@ -4,38 +4,62 @@
 //! constants and create its kernels, and has it record each dispatch. Adding an integrator is its
 //! own module plus one line in [`select`].
 
-use super::{PreparedScene, RenderSettings};
+use super::{IntegratorKind, PreparedScene, RenderSettings};
 use crate::error::Result;
 use crate::layout::{Frame, PassConstants};
 use crate::vk::{Buffer, Context};
 use ash::vk;
 
 pub trait Integrator {
-    /// Its name, for messages and headers.
+    /// Its name, for messages and headers, and the key under which a prepared scene keeps its
+    /// kernels.
     fn name(&self) -> &'static str;
+    /// The AOV planes its kernels add to the film (RGB each, at BINDING_AOVS in this order).
+    fn aov_planes(&self) -> &'static [&'static str] {
+        &[]
+    }
     /// Writes its settings into the frame constants.
     fn configure(&self, frame: &mut Frame);
-    /// Creates its kernels for `scene`, bound to the frame constants and the film.
-    fn kernels(
-        &self,
-        ctx: &Context,
-        scene: &PreparedScene,
-        frame: &Buffer,
-        film: &Buffer,
-    ) -> Result<Box<dyn IntegratorPasses>>;
+    /// Creates its kernels (and the buffers they own) for `scene`.
+    fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>>;
 }
 
-/// An integrator's kernels. A prepared scene keeps them between renders; each render binds its
-/// own frame constants and film first.
+/// An integrator's kernels. A prepared scene keeps them between renders; each render configures
+/// and binds them first.
 pub trait IntegratorPasses {
-    /// Points the kernels at a render's frame constants and film.
-    fn bind(&self, frame: &Buffer, film: &Buffer);
+    /// Writes what the kernels own (e.g. a cache's address) into a render's frame constants.
+    fn configure(
+        &self,
+        _ctx: &Context,
+        _scene: &PreparedScene,
+        _frame: &mut Frame,
+        _settings: &RenderSettings,
+    ) -> Result<()> {
+        Ok(())
+    }
+    /// Points the kernels at a render's frame constants, film and AOV planes.
+    fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>);
+    /// Called before samples [first, first + count) of every pixel are recorded with `seed`:
+    /// brings the integrator's own state (e.g. a cache generation) to what those samples see and
+    /// returns how many of them one dispatch may take (at least 1) while it stays fixed.
+    fn begin(&self, _ctx: &Context, _seed: u64, _first: u32, count: u32) -> Result<u32> {
+        Ok(count)
+    }
     /// Records what adds samples [first_sample, first_sample + sample_count) of the pixels in
     /// `pass.tile` to the film (dispatches and the barriers between them).
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants);
+    /// Figures about the last render for headers and summaries: (name, value).
+    fn report(&self) -> Vec<(String, String)> {
+        Vec::new()
+    }
 }
 
 /// The integrator `settings` ask for.
 pub fn select(settings: &RenderSettings) -> Box<dyn Integrator> {
-    Box::new(super::direct::Direct(settings.integrator))
+    let it = settings.integrator;
+    match it.kind {
+        IntegratorKind::Direct => Box::new(super::direct::Direct(it)),
+        IntegratorKind::Full => Box::new(super::indirect::Full(it)),
+        IntegratorKind::Path => Box::new(super::indirect::Path(it)),
+    }
 }

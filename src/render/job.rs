@@ -14,8 +14,18 @@ use std::path::{Path, PathBuf};
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
 pub fn settings_text(s: &RenderSettings) -> String {
     let it = &s.integrator;
+    // The direct integrator's text predates the others (partial files from before still merge).
+    let integrator = match it.kind {
+        super::IntegratorKind::Direct => String::new(),
+        super::IntegratorKind::Path => format!("integrator=path max_depth={} ", it.max_depth),
+        super::IntegratorKind::Full => format!(
+            "integrator=full specular_depth={} radiosity_cache={} ",
+            it.specular_depth,
+            if it.radiosity_cache { "on" } else { "off" }
+        ),
+    };
     format!(
-        "technique={} light_samples={} brdf_samples={} diffuse_mis={} clamp={} nan_every={}",
+        "{integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} clamp={} nan_every={}",
         it.technique.name(),
         it.light_samples,
         it.brdf_samples,

@@ -8,6 +8,7 @@
 
 mod direct;
 pub mod film;
+mod indirect;
 pub mod integrator;
 pub mod job;
 mod prepared;
@@ -17,7 +18,7 @@ mod settings;
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
-pub use settings::{IntegratorSettings, RenderSettings, Technique};
+pub use settings::{IntegratorKind, IntegratorSettings, RenderSettings, Technique};
 
 use crate::error::{Error, Result};
 use crate::layout::*;
@@ -73,6 +74,9 @@ pub struct RenderStats {
     /// Camera samples whose direct lighting the firefly clamp reduced (0 when it is off).
     pub clamped_samples: u64,
     pub trace: &'static str,
+    /// The integrator's own figures (e.g. the radiosity cache's size and update time), as
+    /// (name, value): written to the EXR header as illum.<name>.
+    pub integrator: Vec<(String, String)>,
     /// The render stopped early through [`RenderSettings::cancel`]; `spp` says how far it got.
     pub interrupted: bool,
 }
@@ -201,9 +205,14 @@ impl Renderer {
         let mut frame_constants = gpu.frame;
         crate::gpu_scene::set_camera(&mut frame_constants, camera, gpu.origin);
         let integrator = integrator::select(settings);
+        let kernel = match prepared.take_kernels(integrator.name()) {
+            Some(k) => k,
+            None => integrator.kernels(ctx, prepared)?,
+        };
         integrator.configure(&mut frame_constants);
         frame_constants.clamp_luminance = settings.clamp.unwrap_or(0.0);
         frame_constants.nan_every = settings.inject_non_finite;
+        kernel.configure(ctx, prepared, &mut frame_constants, settings)?;
         let upload_seconds = prepared.upload_seconds;
         let build = prepared.build.clone();
 
@@ -212,28 +221,35 @@ impl Renderer {
             std::slice::from_ref(&frame_constants),
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
+        let film_usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
         let film_buffer = ctx.create_buffer(
             "film",
             pixels * std::mem::size_of::<FilmPixel>() as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_DST
-                | vk::BufferUsageFlags::TRANSFER_SRC,
+            film_usage,
             MemoryLocation::GpuOnly,
         )?;
-        ctx.one_shot(|cmd| {
-            // SAFETY: the film buffer is alive until the wait.
-            unsafe {
-                ctx.device
-                    .cmd_fill_buffer(cmd, film_buffer.buffer, 0, vk::WHOLE_SIZE, 0)
-            }
-        })?;
-        let kernel = match prepared.take_kernels(integrator.name()) {
-            Some(k) => {
-                k.bind(&frame, &film_buffer);
-                k
-            }
-            None => integrator.kernels(ctx, prepared, &frame, &film_buffer)?,
+        let planes = integrator.aov_planes().len() as u64;
+        let aov_buffer = if planes > 0 {
+            Some(ctx.create_buffer(
+                "aovs",
+                pixels * planes * 16,
+                film_usage,
+                MemoryLocation::GpuOnly,
+            )?)
+        } else {
+            None
         };
+        let clear_film = || -> Result<()> {
+            film::clear(ctx, &film_buffer)?;
+            if let Some(a) = &aov_buffer {
+                film::clear(ctx, a)?;
+            }
+            Ok(())
+        };
+        clear_film()?;
+        kernel.bind(&frame, &film_buffer, aov_buffer.as_ref());
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
 
@@ -278,7 +294,7 @@ impl Renderer {
         for (index, &seed) in seeds.iter().enumerate() {
             let t0 = if index == 0 { t0 } else { Instant::now() };
             if index > 0 {
-                film::clear(ctx, &film_buffer)?;
+                clear_film()?;
             }
             let mut interrupted = false;
             let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
@@ -304,6 +320,8 @@ impl Renderer {
                     let s = first + done + k;
                     let (block_start, block_end) = film::block_of(s, settings.spp);
                     let n = per_dispatch.min(pass - k).min(block_end - s);
+                    // The integrator's own state (a cache generation) may end a dispatch early.
+                    let n = kernel.begin(ctx, seed, s, n)?.clamp(1, n);
                     for y0 in (window.y0..window.y1).step_by(TILE as usize) {
                         for x0 in (window.x0..window.x1).step_by(TILE as usize) {
                             let pc = PassConstants {
@@ -341,7 +359,7 @@ impl Renderer {
                                 sums: block,
                             });
                         }
-                        film::clear(ctx, &film_buffer)?;
+                        clear_film()?;
                     }
                     progress(done + k, budget);
                     if cancelled() {
@@ -409,6 +427,7 @@ impl Renderer {
                     non_finite_samples: resolved.non_finite_samples,
                     rays: resolved.rays,
                     trace: trace.name(),
+                    integrator: kernel.report(),
                     dark_lights: gpu.dark_lights.clone(),
                     emitters: gpu.emitters,
                     clamped_samples: resolved.clamped_samples,

@@ -18,6 +18,11 @@ pub struct PreparedScene {
     /// Wall time of the upload and of the trace structure's build.
     pub upload_seconds: f64,
     pub build: BuildStats,
+    /// The largest diffuse albedo of any material (textures included): how fast indirect
+    /// diffuse light converges over bounces, and whether any can exist.
+    pub max_albedo: f32,
+    /// Diagonal of the scene's geometry bounds (scene units): the scale of cache cells.
+    pub extent: f32,
     /// Kernels of the integrators that rendered it, by name: pipelines are created once.
     kernels: RefCell<Vec<(&'static str, Box<dyn IntegratorPasses>)>>,
 }
@@ -50,6 +55,8 @@ impl Renderer {
         let upload_seconds = t0.elapsed().as_secs_f64();
         let trace = TraceStructure::build(ctx, &gpu, mode)?;
         Ok(PreparedScene {
+            max_albedo: max_albedo(scene),
+            extent: extent(&gpu),
             build: trace.build_stats().clone(),
             gpu,
             trace,
@@ -58,4 +65,51 @@ impl Renderer {
             kernels: RefCell::new(Vec::new()),
         })
     }
+}
+
+fn max_albedo(scene: &Scene) -> f32 {
+    let texture_max = |t: Option<u32>| {
+        t.map_or(1.0, |t| {
+            scene.textures[t as usize]
+                .texels
+                .iter()
+                .map(|v| v.x.max(v.y).max(v.z))
+                .fold(0.0f32, f32::max)
+        })
+    };
+    scene
+        .materials
+        .iter()
+        .map(|m| {
+            let base = match &m.metallic_roughness {
+                Some(mr) => mr.base_color.max_element(),
+                None => m.diffuse.max_element(),
+            };
+            base * texture_max(m.diffuse_texture)
+        })
+        .fold(0.0f32, f32::max)
+}
+
+fn extent(gpu: &GpuScene) -> f32 {
+    let (mut lo, mut hi) = (
+        glam::Vec3::splat(f32::INFINITY),
+        glam::Vec3::splat(f32::NEG_INFINITY),
+    );
+    for b in &gpu.shape_boxes {
+        lo = lo.min(glam::Vec3::new(b[0], b[1], b[2]));
+        hi = hi.max(glam::Vec3::new(b[3], b[4], b[5]));
+    }
+    for (mesh, rows) in &gpu.instances {
+        let r = gpu.meshes[*mesh as usize];
+        let first = r.first_vertex as usize;
+        for p in &gpu.positions[first..first + r.vertex_count as usize] {
+            let w = glam::Vec3::from_array(std::array::from_fn(|i| {
+                rows[i][0] * p.x + rows[i][1] * p.y + rows[i][2] * p.z + rows[i][3]
+            }));
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+    let d = (hi - lo).length();
+    if d.is_finite() { d } else { 1.0 }
 }

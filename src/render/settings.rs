@@ -43,9 +43,55 @@ impl std::str::FromStr for Technique {
     }
 }
 
-/// Sample counts and switches of the direct-lighting integrator.
+/// Which integrator renders (src/render/integrator.rs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum IntegratorKind {
+    /// Direct lighting only (emission seen directly, direct lighting at the camera hit).
+    #[default]
+    Direct,
+    /// The seed's split: direct lighting, indirect diffuse through the radiosity cache, and the
+    /// reflection integrator (TECHNIQUES.md §6.5).
+    Full,
+    /// A brute-force unidirectional path tracer: the reference for `Full`.
+    Path,
+}
+
+impl IntegratorKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Direct => "direct",
+            IntegratorKind::Full => "full",
+            IntegratorKind::Path => "path",
+        }
+    }
+}
+
+impl std::str::FromStr for IntegratorKind {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "direct" => Ok(IntegratorKind::Direct),
+            "full" => Ok(IntegratorKind::Full),
+            "path" => Ok(IntegratorKind::Path),
+            _ => Err(format!(
+                "unknown integrator {s:?} (expected direct, full or path)"
+            )),
+        }
+    }
+}
+
+/// The integrator and its sample counts and switches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntegratorSettings {
+    pub kind: IntegratorKind,
+    /// `path`: the most path segments, as Mitsuba's `max_depth` (1: emission seen directly,
+    /// 2: direct lighting); -1: unbounded (Russian roulette ends paths).
+    pub max_depth: i32,
+    /// `full`: the most specular bounces of the reflection integrator.
+    pub specular_depth: u32,
+    /// `full`: indirect diffuse through the radiosity cache (false: by brute force, the same
+    /// partition without the cache, to measure its bias and gain).
+    pub radiosity_cache: bool,
     pub technique: Technique,
     /// Most light samples per light and camera sample; each light takes
     /// ceil(its solid-angle share of the hemisphere × this), at least 1 (the course's rule).
@@ -59,6 +105,10 @@ pub struct IntegratorSettings {
 impl Default for IntegratorSettings {
     fn default() -> Self {
         IntegratorSettings {
+            kind: IntegratorKind::Direct,
+            max_depth: -1,
+            specular_depth: 4,
+            radiosity_cache: true,
             technique: Technique::Mis,
             light_samples: 4,
             brdf_samples: 2,
@@ -136,6 +186,18 @@ impl RenderSettings {
             return Err(Error::Invalid(format!(
                 "light and BRDF sample counts must be in 1..=64, got {} and {}",
                 it.light_samples, it.brdf_samples
+            )));
+        }
+        if it.max_depth == 0 || it.max_depth < -1 {
+            return Err(Error::Invalid(format!(
+                "--max-depth counts path segments: -1 (unbounded) or at least 1, got {}",
+                it.max_depth
+            )));
+        }
+        if it.specular_depth > 64 {
+            return Err(Error::Invalid(format!(
+                "--specular-depth must be in 0..=64, got {}",
+                it.specular_depth
             )));
         }
         if let Some(c) = self.clamp

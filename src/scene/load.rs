@@ -173,7 +173,23 @@ pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<S
         lights: p.lights,
         description: file.description.clone(),
         source: None,
+        integrator: file.integrator.map(integrator_choice).unwrap_or_default(),
     })
+}
+
+fn integrator_choice(d: super::format::IntegratorDef) -> IntegratorChoice {
+    use super::format::IntegratorKindDef as K;
+    use crate::render::IntegratorKind;
+    IntegratorChoice {
+        kind: d.kind.map(|k| match k {
+            K::Direct => IntegratorKind::Direct,
+            K::Full => IntegratorKind::Full,
+            K::Path => IntegratorKind::Path,
+        }),
+        max_depth: d.max_depth,
+        specular_depth: d.specular_depth,
+        radiosity_cache: d.radiosity_cache,
+    }
 }
 
 pub(crate) struct Builder<'a> {

@@ -26,6 +26,17 @@ pub struct Scene {
     pub description: Option<String>,
     /// The scene file it came from (None for the embedded default scene).
     pub source: Option<PathBuf>,
+    /// The file's `integrator` section: defaults that the command line overrides.
+    pub integrator: IntegratorChoice,
+}
+
+/// A scene's integrator defaults (each field: None = the renderer's default).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct IntegratorChoice {
+    pub kind: Option<crate::render::IntegratorKind>,
+    pub max_depth: Option<i32>,
+    pub specular_depth: Option<u32>,
+    pub radiosity_cache: Option<bool>,
 }
 
 #[derive(Clone, Debug)]

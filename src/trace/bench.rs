@@ -78,6 +78,7 @@ pub fn mesh_scene(mesh: Mesh, eye: DVec3, size: u32) -> Scene {
         shapes: Vec::new(),
         lights: Vec::new(),
         description: None,
+        integrator: Default::default(),
         source: None,
     }
 }

@@ -1,0 +1,195 @@
+//! Indirect lighting (TECHNIQUES.md §6): the seed's split into direct lighting, indirect diffuse
+//! through the radiosity cache and the reflection integrator (`full`, glsl/indirect/full.comp),
+//! and a brute-force path tracer to check it against (`path`, glsl/indirect/path.comp). Both
+//! light their camera hits exactly as the direct integrator does and add the AOV planes
+//! Direct, IndirectDiffuse and Reflection, whose sum is the beauty.
+
+mod radiosity;
+
+use super::direct::{bind_film, configure_direct, dispatch_tile, film_pipeline};
+use super::integrator::{Integrator, IntegratorPasses};
+use super::{IntegratorSettings, PreparedScene, RenderSettings};
+use crate::error::Result;
+use crate::layout::*;
+use crate::shaders;
+use crate::vk::{Buffer, ComputePipeline, Context};
+use ash::vk;
+use radiosity::{CacheShape, RadiosityCache};
+use std::cell::RefCell;
+
+/// The AOV planes of both integrators, in the kernels' order.
+const PLANES: &[&str] = &["Direct", "IndirectDiffuse", "Reflection"];
+
+/// Spread angle (radians) a diffuse bounce adds to a ray cone: about the angular size of one of
+/// ~64 equal-solid-angle parts of the cosine lobe, so that a cache cell is about what one of the
+/// bounce's rays stands for.
+const DIFFUSE_SPREAD: f32 = 0.3;
+
+/// The brute-force path tracer.
+pub struct Path(pub IntegratorSettings);
+
+impl Integrator for Path {
+    fn name(&self) -> &'static str {
+        "path"
+    }
+
+    fn aov_planes(&self) -> &'static [&'static str] {
+        PLANES
+    }
+
+    fn configure(&self, frame: &mut Frame) {
+        configure_direct(&self.0, frame);
+        frame.max_depth = u32::try_from(self.0.max_depth).unwrap_or(NONE);
+        frame.diffuse_spread = DIFFUSE_SPREAD;
+    }
+
+    fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
+        Ok(Box::new(FilmKernel(film_pipeline(
+            ctx,
+            scene,
+            "path",
+            (shaders::PATH_RQ, shaders::PATH_BVH),
+            true,
+        )?)))
+    }
+}
+
+struct FilmKernel(ComputePipeline);
+
+impl IntegratorPasses for FilmKernel {
+    fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
+        bind_film(&self.0, frame, film, aovs);
+    }
+
+    fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
+        dispatch_tile(&self.0, cmd, pass);
+    }
+}
+
+/// Direct lighting, indirect diffuse through the radiosity cache, and reflections.
+pub struct Full(pub IntegratorSettings);
+
+impl Integrator for Full {
+    fn name(&self) -> &'static str {
+        "full"
+    }
+
+    fn aov_planes(&self) -> &'static [&'static str] {
+        PLANES
+    }
+
+    fn configure(&self, frame: &mut Frame) {
+        configure_direct(&self.0, frame);
+        frame.specular_depth = self.0.specular_depth;
+        frame.diffuse_spread = DIFFUSE_SPREAD;
+    }
+
+    fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
+        let film = film_pipeline(
+            ctx,
+            scene,
+            "full",
+            (shaders::FULL_RQ, shaders::FULL_BVH),
+            true,
+        )?;
+        Ok(Box::new(FullKernels {
+            film,
+            cache: RefCell::new(None),
+            off_reason: RefCell::new(String::new()),
+        }))
+    }
+}
+
+struct FullKernels {
+    film: ComputePipeline,
+    /// Created by the first render that uses a cache (its update kernel is compiled then).
+    cache: RefCell<Option<RadiosityCache>>,
+    /// Why the last render had no cache ("" when it had one).
+    off_reason: RefCell<String>,
+}
+
+impl IntegratorPasses for FullKernels {
+    fn configure(
+        &self,
+        ctx: &Context,
+        scene: &PreparedScene,
+        frame: &mut Frame,
+        settings: &RenderSettings,
+    ) -> Result<()> {
+        // Leave the cache out where nothing could read it: no diffuse material or no light.
+        let reason = if !settings.integrator.radiosity_cache {
+            "off (--radiosity-cache off: brute force)"
+        } else if !(scene.max_albedo > 0.0 && scene.gpu.emitters > 0) {
+            "off (no diffuse material or no light: nothing to cache)"
+        } else {
+            ""
+        };
+        *self.off_reason.borrow_mut() = reason.to_string();
+        frame.radiosity_table = 0;
+        // Cells from 2^-14 of the scene's size up to 32 times it.
+        frame.radiosity_cell = (scene.extent * f32::powi(2.0, -14)).max(1e-30);
+        frame.radiosity_levels = 20;
+        if !reason.is_empty() {
+            return Ok(());
+        }
+        let shape = CacheShape::new(frame.width, frame.height, scene.max_albedo);
+        let mut cache = self.cache.borrow_mut();
+        if cache.as_ref().is_none_or(|c| c.shape != shape) {
+            let update = match cache.take() {
+                Some(old) => old.into_pipeline(),
+                None => {
+                    let mut bindings = vec![(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER)];
+                    bindings.extend(scene.trace.bindings());
+                    let update = ComputePipeline::new(
+                        ctx,
+                        "radiosity_update",
+                        scene
+                            .trace
+                            .select(shaders::RADIOSITY_UPDATE_RQ, shaders::RADIOSITY_UPDATE_BVH),
+                        &bindings,
+                        std::mem::size_of::<RadiosityPass>() as u32,
+                        &[scene.gpu.features],
+                    )?;
+                    scene.trace.bind(&update);
+                    update
+                }
+            };
+            *cache = Some(RadiosityCache::new(ctx, update, shape)?);
+        }
+        let c = cache.as_ref().expect("created above");
+        c.configure(frame);
+        c.reset();
+        Ok(())
+    }
+
+    fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
+        bind_film(&self.film, frame, film, aovs);
+        if let Some(c) = self.cache.borrow().as_ref() {
+            c.pipeline()
+                .bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
+        }
+    }
+
+    fn begin(&self, ctx: &Context, seed: u64, first: u32, count: u32) -> Result<u32> {
+        match self.cache.borrow().as_ref() {
+            Some(c) if self.off_reason.borrow().is_empty() => c.begin(ctx, seed, first, count),
+            _ => Ok(count),
+        }
+    }
+
+    fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
+        dispatch_tile(&self.film, cmd, pass);
+    }
+
+    fn report(&self) -> Vec<(String, String)> {
+        let reason = self.off_reason.borrow();
+        if !reason.is_empty() {
+            return vec![("radiosityCache".into(), reason.clone())];
+        }
+        self.cache
+            .borrow()
+            .as_ref()
+            .map(RadiosityCache::report)
+            .unwrap_or_default()
+    }
+}
