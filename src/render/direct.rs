@@ -84,6 +84,7 @@ impl Integrator for Direct {
         scene: &PreparedScene,
         frame: &Buffer,
         film: &Buffer,
+        _aovs: Option<&Buffer>,
     ) -> Result<Box<dyn IntegratorPasses>> {
         Ok(Box::new(PrimaryKernel::new(
             ctx,
@@ -96,7 +97,8 @@ impl Integrator for Direct {
 }
 
 impl IntegratorPasses for PrimaryKernel {
-    fn bind(&self, frame: &Buffer, film: &Buffer) {
+    /// Direct declares no AOV planes: it has no `aovs` buffer.
+    fn bind(&self, frame: &Buffer, film: &Buffer, _aovs: Option<&Buffer>) {
         self.pipeline
             .bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
         self.pipeline

@@ -212,27 +212,44 @@ impl Renderer {
             std::slice::from_ref(&frame_constants),
             vk::BufferUsageFlags::UNIFORM_BUFFER,
         )?;
+        let film_usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
         let film_buffer = ctx.create_buffer(
             "film",
             pixels * std::mem::size_of::<FilmPixel>() as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_DST
-                | vk::BufferUsageFlags::TRANSFER_SRC,
+            film_usage,
             MemoryLocation::GpuOnly,
         )?;
-        ctx.one_shot(|cmd| {
-            // SAFETY: the film buffer is alive until the wait.
-            unsafe {
-                ctx.device
-                    .cmd_fill_buffer(cmd, film_buffer.buffer, 0, vk::WHOLE_SIZE, 0)
-            }
-        })?;
+        // The integrator's AOV planes: pixels x planes vec4 sums, [pixel][plane].
+        let aov_planes: Vec<String> = integrator
+            .aov_planes()
+            .iter()
+            .map(|p| p.to_string())
+            .collect();
+        film::check_aov_names(&aov_planes)
+            .map_err(|e| Error::Invalid(format!("integrator {}: {e}", integrator.name())))?;
+        let aov_buffer = match aov_planes.len() {
+            0 => None,
+            p => Some(ctx.create_buffer(
+                "aovs",
+                pixels * p as u64 * (film::AOV_CHANNELS * 4) as u64,
+                film_usage,
+                MemoryLocation::GpuOnly,
+            )?),
+        };
+        let device_film = film::DeviceFilm {
+            film: &film_buffer,
+            aovs: aov_buffer.as_ref(),
+            aov_planes: aov_planes.len(),
+        };
+        film::clear(ctx, device_film)?;
         let kernel = match prepared.take_kernels(integrator.name()) {
             Some(k) => {
-                k.bind(&frame, &film_buffer);
+                k.bind(&frame, &film_buffer, aov_buffer.as_ref());
                 k
             }
-            None => integrator.kernels(ctx, prepared, &frame, &film_buffer)?,
+            None => integrator.kernels(ctx, prepared, &frame, &film_buffer, aov_buffer.as_ref())?,
         };
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
@@ -278,11 +295,11 @@ impl Renderer {
         for (index, &seed) in seeds.iter().enumerate() {
             let t0 = if index == 0 { t0 } else { Instant::now() };
             if index > 0 {
-                film::clear(ctx, &film_buffer)?;
+                film::clear(ctx, device_film)?;
             }
             let mut interrupted = false;
             let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
-            let mut sums = FilmSums::new(window);
+            let mut sums = FilmSums::new(window, aov_planes.clone());
             let mut passes = Vec::new();
             let mut last_resolved = None;
             while done < budget && !interrupted {
@@ -331,7 +348,7 @@ impl Renderer {
                     if s + n == block_end {
                         // The block is complete: exact sums if the job owns all of it, else kept
                         // whole as a boundary block.
-                        let block = film::download_window(ctx, &film_buffer, w, window)?;
+                        let block = film::download_window(ctx, device_film, w, window)?;
                         if block_start >= range.0 && block_end <= range.1 {
                             sums.add_block(&block);
                         } else {
@@ -341,7 +358,7 @@ impl Renderer {
                                 sums: block,
                             });
                         }
-                        film::clear(ctx, &film_buffer)?;
+                        film::clear(ctx, device_film)?;
                     }
                     progress(done + k, budget);
                     if cancelled() {
@@ -367,9 +384,15 @@ impl Renderer {
                     // Reads the unfinished block without moving it: the block grid stays fixed.
                     let mut peek = sums.with_boundary();
                     if (first + done) % FILM_BLOCK != 0 && first + done != last {
-                        peek.add_block(&film::download_window(ctx, &film_buffer, w, window)?);
+                        peek.add_block(&film::download_window(ctx, device_film, w, window)?);
                     }
-                    let r = film::resolve(&peek.sums, window.width(), window.height(), done);
+                    let r = film::resolve(
+                        &peek.sums,
+                        &aov_planes,
+                        window.width(),
+                        window.height(),
+                        done,
+                    );
                     evaluate_pass(&mut report, &r, settings.reference.as_deref());
                     passes.push(report);
                     last_resolved = Some(r);
@@ -380,13 +403,14 @@ impl Renderer {
             }
             if done < budget {
                 // A time budget ended the render inside a block: keep what was rendered.
-                let block = film::download_window(ctx, &film_buffer, w, window)?;
+                let block = film::download_window(ctx, device_film, w, window)?;
                 sums.add_block(&block);
             }
             let resolved = match last_resolved {
                 Some(r) if r.spp == done => r,
                 _ => film::resolve(
                     &sums.with_boundary().sums,
+                    &aov_planes,
                     window.width(),
                     window.height(),
                     done,
