@@ -316,14 +316,20 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
     let stride = names.len();
     let mut sums = FilmSums::new(window, info.aov_planes.clone());
     for (c, plane) in names.iter().enumerate() {
-        for word in 0..4 {
-            let name = format!("sum.{plane}.w{word}");
-            let Some(FlatSamples::U32(v)) = channel(&name) else {
-                return Err(bad(format!("missing UINT channel {name}")));
-            };
-            for (p, &x) in sums.sums[c..].iter_mut().step_by(stride).zip(v) {
-                *p = (*p as u128 | u128::from(x) << (32 * word)) as i128;
+        let word = |k: usize| {
+            let name = format!("sum.{plane}.w{k}");
+            match channel(&name) {
+                Some(FlatSamples::U32(v)) if v.len() == n => Ok(v),
+                _ => Err(bad(format!("missing UINT channel {name}"))),
             }
+        };
+        let (w0, w1, w2, w3) = (word(0)?, word(1)?, word(2)?, word(3)?);
+        // One pass per channel: the sums are strided, the words are not.
+        for (i, p) in sums.sums[c..].iter_mut().step_by(stride).enumerate() {
+            *p = (u128::from(w0[i])
+                | u128::from(w1[i]) << 32
+                | u128::from(w2[i]) << 64
+                | u128::from(w3[i]) << 96) as i128;
         }
     }
     for k in 0..2 {
