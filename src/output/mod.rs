@@ -1,8 +1,9 @@
 //! Image outputs: multi-layer EXR and sRGB PNG.
 //!
 //! The EXR holds every plane of a [`Film`] as 32-bit float channels in one part, named the
-//! classic way (`R`,`G`,`B`, `Albedo.R`, `N.X`, `Z`, ...) so compositing and denoising tools
-//! find them. The PNG is a display-referred preview of the beauty only.
+//! classic way (`R`,`G`,`B`, `Albedo.R`, `N.X`, `Z`, ..., and `<Name>.R/G/B` for each AOV plane
+//! the integrator declares) so compositing and denoising tools find them. The PNG is a
+//! display-referred preview of the beauty only.
 
 mod file;
 mod openexr;
