@@ -14,10 +14,16 @@
 // Descriptor set 0.
 #define BINDING_FRAME 0
 #define BINDING_FILM 1
+// The AOV planes an integrator declares (Integrator::aov_planes, src/render/integrator.rs): only
+// when it declares P > 0 of them, a storage buffer of P vec4 sums per pixel of the frame, plane k
+// of pixel p (= y * frame.width + x, as for the film) at aovs[p * P + k]; .rgb are the sums of the
+// block's samples, .w is unused (keep it 0). Cleared and read back with the film, so the same
+// 256-sample block rules hold. A kernel declares it as
+//     layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
+// and adds to it as to the film (one invocation owns a pixel: no atomics).
+#define BINDING_AOVS 4
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
-// The AOV planes an integrator declares: vec4 per (pixel, plane), at pixel * planes + plane.
-#define BINDING_AOVS 4
 
 // Specialization constants.
 #define SPEC_FEATURES 0

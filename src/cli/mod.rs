@@ -133,9 +133,9 @@ pub struct IntegratorArgs {
     /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
     #[arg(long)]
     pub diffuse_mis: bool,
-    /// direct: direct lighting only; full: direct + indirect diffuse through the radiosity cache
-    /// + reflections (caustics left out); path: brute-force path tracer (all light paths).
-    /// [default: the scene's "integrator", else direct]
+    /// direct: direct lighting only; full: direct lighting, indirect diffuse through the radiosity
+    /// cache, and reflections (caustics left out); path: brute-force path tracer (all light
+    /// paths). [default: the scene's "integrator", else direct]
     #[arg(long)]
     pub integrator: Option<crate::render::IntegratorKind>,
     /// path: the most path segments, as Mitsuba's max_depth (1: emission seen directly, 2: direct

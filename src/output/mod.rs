@@ -1,8 +1,9 @@
 //! Image outputs: multi-layer EXR and sRGB PNG.
 //!
 //! The EXR holds every plane of a [`Film`] as 32-bit float channels in one part, named the
-//! classic way (`R`,`G`,`B`, `Albedo.R`, `N.X`, `Z`, ...) so compositing and denoising tools
-//! find them. The PNG is a display-referred preview of the beauty only.
+//! classic way (`R`,`G`,`B`, `Albedo.R`, `N.X`, `Z`, ..., and `<Name>.R/G/B` for each AOV plane
+//! the integrator declares) so compositing and denoising tools find them. The PNG is a
+//! display-referred preview of the beauty only.
 
 mod file;
 mod openexr;
@@ -31,10 +32,22 @@ pub struct Film {
     pub emission: Vec<[f32; 3]>,
     /// AOV "Variance" (per-pixel variance of the beauty mean), when present.
     pub variance: Option<Vec<[f32; 3]>>,
+    /// The AOV planes the integrator declares (`Integrator::aov_planes`), in its order: means
+    /// over all samples, written to the EXR as `<name>.R/G/B`.
+    pub aovs: Vec<AovPlane>,
+}
+
+/// An RGB plane an integrator adds to the film (e.g. `Direct`, `IndirectDiffuse`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AovPlane {
+    /// The EXR layer name (see `render::film::check_aov_names`).
+    pub name: String,
+    /// Per-pixel means, row-major like the film's other planes.
+    pub rgb: Vec<[f32; 3]>,
 }
 
 impl Film {
-    /// A zero-filled film without a variance plane.
+    /// A zero-filled film without a variance plane or AOV planes.
     pub fn new(width: u32, height: u32) -> Film {
         let n = width as usize * height as usize;
         Film {
@@ -46,6 +59,7 @@ impl Film {
             depth: vec![0.0; n],
             emission: vec![[0.0; 3]; n],
             variance: None,
+            aovs: Vec::new(),
         }
     }
 
@@ -65,6 +79,13 @@ impl Film {
             });
         }
         let expected = self.pixel_count();
+        let names: Vec<&str> = self.aovs.iter().map(|a| a.name.as_str()).collect();
+        if let Err(reason) = crate::render::film::check_aov_names(&names) {
+            return Err(OutputError::AovName {
+                path: path.to_path_buf(),
+                reason,
+            });
+        }
         let planes = [
             ("beauty", self.beauty.len()),
             ("albedo", self.albedo.len()),
@@ -76,11 +97,12 @@ impl Film {
                 self.variance.as_ref().map_or(expected, Vec::len),
             ),
         ];
-        for (plane, len) in planes {
+        let aovs = self.aovs.iter().map(|a| (a.name.as_str(), a.rgb.len()));
+        for (plane, len) in planes.into_iter().chain(aovs) {
             if len != expected {
                 return Err(OutputError::PlaneSize {
                     path: path.to_path_buf(),
-                    plane,
+                    plane: plane.to_string(),
                     width: self.width,
                     height: self.height,
                     len,
@@ -122,11 +144,13 @@ pub enum OutputError {
     )]
     PlaneSize {
         path: PathBuf,
-        plane: &'static str,
+        plane: String,
         width: u32,
         height: u32,
         len: usize,
     },
+    #[error("cannot write {}: {reason}", .path.display())]
+    AovName { path: PathBuf, reason: String },
     #[error("cannot write {}: EXR attribute `{name}`: {reason}", .path.display())]
     Attribute {
         path: PathBuf,

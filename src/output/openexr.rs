@@ -127,25 +127,34 @@ enum Source<'a> {
 struct FilmChannels<'a> {
     width: usize,
     /// Sorted by name, as the EXR channel list must be.
-    channels: Vec<(&'static str, Source<'a>)>,
+    channels: Vec<(String, Source<'a>)>,
 }
 
 impl<'a> FilmChannels<'a> {
     fn new(film: &'a Film) -> Self {
-        let mut channels = vec![("Z", Source::Scalar(&film.depth))];
-        let mut add = |names: [&'static str; 3], plane: &'a [[f32; 3]]| {
-            for (c, name) in names.into_iter().enumerate() {
+        let mut channels = vec![("Z".to_string(), Source::Scalar(&film.depth))];
+        let mut add = |layer: &str, components: [&str; 3], plane: &'a [[f32; 3]]| {
+            for (c, component) in components.into_iter().enumerate() {
+                let name = if layer.is_empty() {
+                    component.to_string()
+                } else {
+                    format!("{layer}.{component}")
+                };
                 channels.push((name, Source::Component(plane, c)));
             }
         };
-        add(["R", "G", "B"], &film.beauty);
-        add(["Albedo.R", "Albedo.G", "Albedo.B"], &film.albedo);
-        add(["N.X", "N.Y", "N.Z"], &film.normal);
-        add(["Emission.R", "Emission.G", "Emission.B"], &film.emission);
+        const RGB: [&str; 3] = ["R", "G", "B"];
+        add("", RGB, &film.beauty);
+        add("Albedo", RGB, &film.albedo);
+        add("N", ["X", "Y", "Z"], &film.normal);
+        add("Emission", RGB, &film.emission);
         if let Some(variance) = &film.variance {
-            add(["Variance.R", "Variance.G", "Variance.B"], variance);
+            add("Variance", RGB, variance);
         }
-        channels.sort_unstable_by_key(|(name, _)| *name);
+        for aov in &film.aovs {
+            add(&aov.name, RGB, &aov.rgb);
+        }
+        channels.sort_unstable_by(|a, b| a.0.cmp(&b.0));
         Self {
             width: film.width as usize,
             channels,
@@ -404,15 +413,29 @@ mod tests {
     #[test]
     fn channel_list_is_sorted_and_complete() {
         let mut film = Film::new(2, 2);
-        let names =
-            |f: &Film| -> Vec<&str> { FilmChannels::new(f).channels.iter().map(|c| c.0).collect() };
+        let names = |f: &Film| -> Vec<String> {
+            FilmChannels::new(f)
+                .channels
+                .iter()
+                .map(|c| c.0.clone())
+                .collect()
+        };
         let without = names(&film);
         assert_eq!(without.len(), 13);
         assert!(without.is_sorted());
         film.variance = Some(vec![[0.0; 3]; 4]);
         let with = names(&film);
         assert_eq!(with.len(), 16);
-        assert!(with.is_sorted() && with.contains(&"Variance.G"));
+        assert!(with.is_sorted() && with.contains(&"Variance.G".to_string()));
+        for name in ["Direct", "IndirectDiffuse", "Reflection"] {
+            film.aovs.push(crate::output::AovPlane {
+                name: name.into(),
+                rgb: vec![[0.0; 3]; 4],
+            });
+        }
+        let aovs = names(&film);
+        assert_eq!(aovs.len(), 25);
+        assert!(aovs.is_sorted() && aovs.contains(&"IndirectDiffuse.B".to_string()));
     }
 
     #[test]

@@ -2,18 +2,21 @@
 //! exact film sums so that `illum merge` can rebuild the image bit for bit (src/render/film.rs).
 //!
 //! The data window is the job's pixel window. Channels (all sorted by name, as EXR wants):
-//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128; units in src/render/film.rs) of each of the 24
-//!   film channels [`PLANES`], as four little-endian 32-bit words (UINT channels, w0 lowest);
+//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128; units in src/render/film.rs) of each
+//!   film channel ([`channel_names`]: the 24 of [`PLANES`], then `<Name>.r`, `.g`, `.b`, `.unused`
+//!   for each AOV plane the integrator declares), as four little-endian 32-bit words (UINT
+//!   channels, w0 lowest);
 //! - `block<k>.<plane>` (k = 0, 1): float32 sums of a whole film block that the job owns only
 //!   partly, with its sample range in the header attribute `illum.block<k>` = "start..end".
 //!
 //! Header attributes (text): `illum.partial` = "1", `illum.samples` = "A..B", `illum.crop` =
 //! "x0,y0,x1,y1", `illum.frame` = "WxH", `illum.spp` (of the whole image), `illum.seed`,
 //! `illum.sceneHash`, `illum.settings`, `illum.trace`, `illum.version`, `illum.device`,
-//! `illum.renderSeconds`, `illum.setupSeconds`.
+//! `illum.renderSeconds`, `illum.setupSeconds`, and `illum.aovPlanes` = the AOV planes' names,
+//! comma-separated, in channel order (absent when the integrator declares none).
 
 use super::OutputError;
-use crate::render::film::{BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
+use crate::render::film::{self, BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
 use exr::prelude::*;
 use std::path::Path;
 
@@ -45,6 +48,24 @@ pub const PLANES: [&str; FILM_CHANNELS] = [
     "odd.unused",
 ];
 
+/// Suffixes of an AOV plane's four channels (its vec4 on the device; the fourth is unused).
+pub const AOV_COMPONENTS: [&str; film::AOV_CHANNELS] = ["r", "g", "b", "unused"];
+
+/// Names of every film channel of a film with the AOV planes `aov_planes`, in order: [`PLANES`],
+/// then `<Name>.r`, `<Name>.g`, `<Name>.b`, `<Name>.unused` per plane.
+pub fn channel_names<S: AsRef<str>>(aov_planes: &[S]) -> Vec<String> {
+    let mut names: Vec<String> = PLANES.iter().map(|p| p.to_string()).collect();
+    for plane in aov_planes {
+        for c in AOV_COMPONENTS {
+            names.push(format!("{}.{c}", plane.as_ref()));
+        }
+    }
+    names
+}
+
+/// Header attribute naming the AOV planes.
+const AOV_PLANES: &str = "illum.aovPlanes";
+
 /// What a partial EXR says about its job, besides the sums.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PartInfo {
@@ -62,6 +83,8 @@ pub struct PartInfo {
     pub device: String,
     pub render_seconds: f64,
     pub setup_seconds: f64,
+    /// The AOV planes of the integrator that rendered it, in channel order.
+    pub aov_planes: Vec<String>,
 }
 
 /// Writes a job's sums and description to `path`.
@@ -76,13 +99,31 @@ pub fn write_partial(
     };
     let w = sums.window;
     let n = w.pixels();
+    if info.aov_planes != sums.aov_planes {
+        return Err(OutputError::Attribute {
+            path: path.to_path_buf(),
+            name: AOV_PLANES.into(),
+            reason: format!(
+                "the job names the planes {:?}, its sums hold {:?}",
+                info.aov_planes, sums.aov_planes
+            ),
+        });
+    }
+    if let Err(reason) = film::check_aov_names(&sums.aov_planes) {
+        return Err(OutputError::AovName {
+            path: path.to_path_buf(),
+            reason,
+        });
+    }
+    let names = channel_names(&sums.aov_planes);
+    let stride = names.len();
     let mut channels = Vec::new();
-    for (c, plane) in PLANES.iter().enumerate() {
+    for (c, plane) in names.iter().enumerate() {
         for word in 0..4 {
-            let data: Vec<u32> = sums
-                .sums
+            let data: Vec<u32> = sums.sums[c..]
                 .iter()
-                .map(|p| (p[c] as u128 >> (32 * word)) as u32)
+                .step_by(stride)
+                .map(|&x| (x as u128 >> (32 * word)) as u32)
                 .collect();
             channels.push(AnyChannel::new(
                 Text::from(format!("sum.{plane}.w{word}").as_str()),
@@ -98,8 +139,8 @@ pub fn write_partial(
         );
     };
     for (k, b) in sums.boundary.iter().enumerate() {
-        for (c, plane) in PLANES.iter().enumerate() {
-            let data: Vec<f32> = b.sums.iter().map(|p| p[c]).collect();
+        for (c, plane) in names.iter().enumerate() {
+            let data: Vec<f32> = b.sums[c..].iter().step_by(stride).copied().collect();
             channels.push(AnyChannel::new(
                 Text::from(format!("block{k}.{plane}").as_str()),
                 FlatSamples::F32(data),
@@ -126,6 +167,9 @@ pub fn write_partial(
     put("illum.device", info.device.clone());
     put("illum.renderSeconds", info.render_seconds.to_string());
     put("illum.setupSeconds", info.setup_seconds.to_string());
+    if !info.aov_planes.is_empty() {
+        put(AOV_PLANES, info.aov_planes.join(","));
+    }
     debug_assert!(channels.iter().all(|c| c.sample_data.len() == n));
     let layer = Layer::new(
         (w.width() as usize, w.height() as usize),
@@ -181,6 +225,13 @@ fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> R
         return Err(bad(format!("illum.crop = {crop:?} is not x0,y0,x1,y1")));
     };
     let window = Window { x0, y0, x1, y1 };
+    // Absent: the integrator declares no AOV planes.
+    let aov_planes: Vec<String> = match attributes.other.get(&Text::from(AOV_PLANES)) {
+        Some(AttributeValue::Text(t)) => t.to_string().split(',').map(String::from).collect(),
+        Some(_) => return Err(bad(format!("{AOV_PLANES} is not text"))),
+        None => Vec::new(),
+    };
+    film::check_aov_names(&aov_planes).map_err(|e| bad(format!("{AOV_PLANES}: {e}")))?;
     let frame_text = attr("illum.frame")?;
     let frame = frame_text
         .split_once('x')
@@ -201,6 +252,7 @@ fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> R
         device: attr("illum.device")?,
         render_seconds: num("illum.renderSeconds")?,
         setup_seconds: num("illum.setupSeconds")?,
+        aov_planes,
     };
     if size != Vec2(window.width() as usize, window.height() as usize) {
         return Err(bad(format!(
@@ -260,16 +312,24 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
             .find(|c| c.name == *name)
             .map(|c| &c.sample_data)
     };
-    let mut sums = FilmSums::new(window);
-    for (c, plane) in PLANES.iter().enumerate() {
-        for word in 0..4 {
-            let name = format!("sum.{plane}.w{word}");
-            let Some(FlatSamples::U32(v)) = channel(&name) else {
-                return Err(bad(format!("missing UINT channel {name}")));
-            };
-            for (p, &x) in sums.sums.iter_mut().zip(v) {
-                p[c] = (p[c] as u128 | u128::from(x) << (32 * word)) as i128;
+    let names = channel_names(&info.aov_planes);
+    let stride = names.len();
+    let mut sums = FilmSums::new(window, info.aov_planes.clone());
+    for (c, plane) in names.iter().enumerate() {
+        let word = |k: usize| {
+            let name = format!("sum.{plane}.w{k}");
+            match channel(&name) {
+                Some(FlatSamples::U32(v)) if v.len() == n => Ok(v),
+                _ => Err(bad(format!("missing UINT channel {name}"))),
             }
+        };
+        let (w0, w1, w2, w3) = (word(0)?, word(1)?, word(2)?, word(3)?);
+        // One pass per channel: the sums are strided, the words are not.
+        for (i, p) in sums.sums[c..].iter_mut().step_by(stride).enumerate() {
+            *p = (u128::from(w0[i])
+                | u128::from(w1[i]) << 32
+                | u128::from(w2[i]) << 64
+                | u128::from(w3[i]) << 96) as i128;
         }
     }
     for k in 0..2 {
@@ -282,15 +342,15 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
         let mut block = BoundaryBlock {
             start: range.0,
             end: range.1,
-            sums: vec![[0.0; FILM_CHANNELS]; n],
+            sums: vec![0.0; n * stride],
         };
-        for (c, plane) in PLANES.iter().enumerate() {
+        for (c, plane) in names.iter().enumerate() {
             let name = format!("block{k}.{plane}");
             let Some(FlatSamples::F32(v)) = channel(&name) else {
                 return Err(bad(format!("missing FLOAT channel {name}")));
             };
-            for (p, &x) in block.sums.iter_mut().zip(v) {
-                p[c] = x;
+            for (p, &x) in block.sums[c..].iter_mut().step_by(stride).zip(v) {
+                *p = x;
             }
         }
         sums.boundary.push(block);

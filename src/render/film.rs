@@ -1,7 +1,10 @@
-//! The film: per-pixel sums of every plane (FilmPixel's 24 floats), moved off the device on a
-//! fixed grid of sample blocks and accumulated exactly, so that a render split into jobs (sample
-//! ranges, pixel windows) and merged is bit-identical to the render in one piece.
+//! The film: per-pixel sums of every plane (FilmPixel's 24 floats, then 4 per AOV plane that the
+//! integrator declares), moved off the device on a fixed grid of sample blocks and accumulated
+//! exactly, so that a render split into jobs (sample ranges, pixel windows) and merged is
+//! bit-identical to the render in one piece.
 //!
+//! - Host sums are flat: pixel-major, [`channels`] values a pixel (FilmPixel's members in order,
+//!   then each AOV plane's vec4 from the device's "aovs" buffer, [pixel][plane]).
 //! - The device sums the samples of one block in float32: block k holds samples
 //!   [256 k, min(256 (k + 1), N)) of an N-sample render, counted from sample 0 whatever the job,
 //!   each dispatch taking them in index order. float32 sums of a block never depend on how the
@@ -18,22 +21,59 @@
 
 use crate::error::Result;
 use crate::layout::FilmPixel;
-use crate::output::Film;
+use crate::output::{AovPlane, Film};
 use crate::vk::{Buffer, Context};
 
 /// Samples per block of the film grid (and the most one invocation takes per dispatch).
 pub const FILM_BLOCK: u32 = 256;
 /// Floats per pixel in the device film (FilmPixel).
 pub const FILM_CHANNELS: usize = 24;
+/// Floats per AOV plane and pixel (a vec4 of the "aovs" buffer: rgb sums, w unused).
+pub const AOV_CHANNELS: usize = 4;
+
+/// Channels per pixel of a film with `aov_planes` AOV planes.
+pub fn channels(aov_planes: usize) -> usize {
+    FILM_CHANNELS + AOV_CHANNELS * aov_planes
+}
+
 /// Fixed-point unit of channel c's exact sums: 2^-fixed_bits(c) (the squares, FilmPixel's
-/// beauty_sq.rgb, get a coarser unit for their range).
+/// beauty_sq.rgb, get a coarser unit for their range; AOV planes have the beauty's).
 pub fn fixed_bits(c: usize) -> i32 {
     if (4..7).contains(&c) { 24 } else { 64 }
 }
 
+/// Why `names` cannot be a film's AOV planes, if they cannot: each is a layer name of the final
+/// EXR (`<name>.R/G/B`), so it starts with an ASCII capital, continues with ASCII letters, digits
+/// or `_`, is not one of the film's own layers (Albedo, N, Emission, Variance) and is not given
+/// twice.
+pub fn check_aov_names<S: AsRef<str>>(names: &[S]) -> std::result::Result<(), String> {
+    for (k, name) in names.iter().enumerate() {
+        let name = name.as_ref();
+        let mut chars = name.chars();
+        let well_formed = chars.next().is_some_and(|c| c.is_ascii_uppercase())
+            && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+            && name.len() <= 64;
+        if !well_formed {
+            return Err(format!(
+                "AOV plane {name:?} is not a layer name (an ASCII capital, then letters, digits or _; at most 64)"
+            ));
+        }
+        if ["Albedo", "N", "Emission", "Variance"].contains(&name) {
+            return Err(format!("AOV plane {name:?} is a layer of the film itself"));
+        }
+        if names[..k].iter().any(|n| n.as_ref() == name) {
+            return Err(format!("AOV plane {name:?} is given twice"));
+        }
+    }
+    Ok(())
+}
+
 /// A float32 block sum of channel `c` in fixed point (NaN reads 0; out of range saturates).
+#[inline]
 pub fn to_fixed(v: f32, c: usize) -> i128 {
-    let x = (f64::from(v) * 2f64.powi(fixed_bits(c))).round();
+    // 2^fixed_bits(c), built from its exponent bits: exact, and cheap in the merge's inner loop.
+    let scale = f64::from_bits(((1023 + fixed_bits(c)) as u64) << 52);
+    let x = (f64::from(v) * scale).round();
     if x.is_nan() { 0 } else { x as i128 }
 }
 
@@ -91,8 +131,8 @@ impl std::fmt::Display for Window {
 pub struct BoundaryBlock {
     pub start: u32,
     pub end: u32,
-    /// Window pixels, row-major.
-    pub sums: Vec<[f32; FILM_CHANNELS]>,
+    /// Window pixels, row-major, [`FilmSums::channels`] floats each.
+    pub sums: Vec<f32>,
 }
 
 /// Exact sums of a job: its pixel window, the blocks it owns wholly (fixed point), and the blocks
@@ -100,34 +140,39 @@ pub struct BoundaryBlock {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilmSums {
     pub window: Window,
-    pub sums: Vec<[i128; FILM_CHANNELS]>,
+    /// The integrator's AOV planes: channels 24 + 4 k .. 24 + 4 k + 4 of a pixel are plane k's
+    /// (rgb sums; the fourth is unused).
+    pub aov_planes: Vec<String>,
+    /// Window pixels, row-major, [`FilmSums::channels`] values each.
+    pub sums: Vec<i128>,
     pub boundary: Vec<BoundaryBlock>,
 }
 
 impl FilmSums {
-    pub fn new(window: Window) -> FilmSums {
+    pub fn new(window: Window, aov_planes: Vec<String>) -> FilmSums {
         FilmSums {
             window,
-            sums: vec![[0; FILM_CHANNELS]; window.pixels()],
+            sums: vec![0; window.pixels() * channels(aov_planes.len())],
+            aov_planes,
             boundary: Vec::new(),
         }
     }
 
-    /// Adds float32 block sums (window pixels) exactly.
-    pub fn add_block(&mut self, block: &[[f32; FILM_CHANNELS]]) {
-        for (acc, p) in self.sums.iter_mut().zip(block) {
-            for (c, (a, x)) in acc.iter_mut().zip(p).enumerate() {
-                *a = a.saturating_add(to_fixed(*x, c));
-            }
-        }
+    /// Values per pixel: 24, and 4 per AOV plane.
+    pub fn channels(&self) -> usize {
+        channels(self.aov_planes.len())
     }
 
-    /// Adds another job's fixed-point sums of the same window.
-    pub fn add_sums(&mut self, other: &[[i128; FILM_CHANNELS]]) {
-        for (acc, p) in self.sums.iter_mut().zip(other) {
-            for (a, x) in acc.iter_mut().zip(p) {
-                *a = a.saturating_add(*x);
-            }
+    /// Adds float32 block sums (window pixels, [`FilmSums::channels`] each) exactly.
+    pub fn add_block(&mut self, block: &[f32]) {
+        let channels = self.channels();
+        add_block(&mut self.sums, block, channels);
+    }
+
+    /// Adds another job's fixed-point sums of the same window and planes.
+    pub fn add_sums(&mut self, other: &[i128]) {
+        for (a, x) in self.sums.iter_mut().zip(other) {
+            *a = a.saturating_add(*x);
         }
     }
 
@@ -135,6 +180,7 @@ impl FilmSums {
     pub fn with_boundary(&self) -> FilmSums {
         let mut all = FilmSums {
             window: self.window,
+            aov_planes: self.aov_planes.clone(),
             sums: self.sums.clone(),
             boundary: Vec::new(),
         };
@@ -145,33 +191,71 @@ impl FilmSums {
     }
 }
 
+/// Adds float32 sums to fixed-point ones, both `channels` values a pixel, exactly.
+pub fn add_block(sums: &mut [i128], block: &[f32], channels: usize) {
+    for (acc, p) in sums
+        .chunks_exact_mut(channels)
+        .zip(block.chunks_exact(channels))
+    {
+        for (c, (a, x)) in acc.iter_mut().zip(p).enumerate() {
+            *a = a.saturating_add(to_fixed(*x, c));
+        }
+    }
+}
+
+/// The device film of a render: FilmPixel per pixel of the frame and, when the integrator
+/// declares AOV planes, the "aovs" buffer of their vec4s ([pixel][plane]).
+#[derive(Clone, Copy)]
+pub struct DeviceFilm<'a> {
+    pub film: &'a Buffer,
+    pub aovs: Option<&'a Buffer>,
+    /// AOV planes in `aovs` (0 without it).
+    pub aov_planes: usize,
+}
+
 /// Reads the device film's pixels inside `window` (the device film covers the whole frame of
-/// `width` pixels a row).
+/// `width` pixels a row), [`channels`] floats a pixel: FilmPixel's, then each AOV plane's vec4.
 pub fn download_window(
     ctx: &Context,
-    film: &Buffer,
+    film: DeviceFilm,
     width: u32,
     window: Window,
-) -> Result<Vec<[f32; FILM_CHANNELS]>> {
+) -> Result<Vec<f32>> {
     let rows = window.y1 as usize * width as usize;
-    let raw: Vec<FilmPixel> = ctx.download(film, rows)?;
-    let mut out = Vec::with_capacity(window.pixels());
+    let raw: Vec<FilmPixel> = ctx.download(film.film, rows)?;
+    let raw: &[f32] = bytemuck::cast_slice(&raw);
+    let p = film.aov_planes;
+    let aovs: Vec<[f32; AOV_CHANNELS]> = match film.aovs {
+        Some(a) if p > 0 => ctx.download(a, rows * p)?,
+        _ => Vec::new(),
+    };
+    let aovs: &[f32] = bytemuck::cast_slice(&aovs);
+    let (c, a) = (channels(p), AOV_CHANNELS * p);
+    let mut out = Vec::with_capacity(window.pixels() * c);
     for y in window.y0..window.y1 {
-        for x in window.x0..window.x1 {
-            let p = &raw[(y * width + x) as usize];
-            out.push(*bytemuck::cast_ref::<FilmPixel, [f32; FILM_CHANNELS]>(p));
+        let row = (y * width) as usize;
+        for x in window.x0 as usize..window.x1 as usize {
+            let i = row + x;
+            out.extend_from_slice(&raw[i * FILM_CHANNELS..(i + 1) * FILM_CHANNELS]);
+            if a > 0 {
+                out.extend_from_slice(&aovs[i * a..(i + 1) * a]);
+            }
         }
     }
     Ok(out)
 }
 
-/// Clears the device film for the next block.
-pub fn clear(ctx: &Context, film: &Buffer) -> Result<()> {
+/// Clears the device film (and its AOV planes) for the next block.
+pub fn clear(ctx: &Context, film: DeviceFilm) -> Result<()> {
     ctx.one_shot(|cmd| {
-        // SAFETY: the film buffer is alive until the wait.
+        // SAFETY: the film buffers are alive until the wait.
         unsafe {
             ctx.device
-                .cmd_fill_buffer(cmd, film.buffer, 0, ash::vk::WHOLE_SIZE, 0)
+                .cmd_fill_buffer(cmd, film.film.buffer, 0, ash::vk::WHOLE_SIZE, 0);
+            if let Some(a) = film.aovs {
+                ctx.device
+                    .cmd_fill_buffer(cmd, a.buffer, 0, ash::vk::WHOLE_SIZE, 0);
+            }
         }
     })
 }
@@ -192,15 +276,30 @@ pub struct Resolved {
 
 /// Beauty, emission, albedo and normal are averaged over all samples (misses count as 0, as
 /// denoisers expect); Z over the samples that hit (+inf where none did); Variance is the variance
-/// of the pixel mean, s² / n. `sums` are the window's pixels, `width` x `height`.
-pub fn resolve(sums: &[[i128; FILM_CHANNELS]], width: u32, height: u32, spp: u32) -> Resolved {
+/// of the pixel mean, s² / n; each AOV plane is averaged over all samples too. `sums` are the
+/// window's pixels, `width` x `height`, with the planes `aov_planes` after FilmPixel's channels.
+pub fn resolve(
+    sums: &[i128],
+    aov_planes: &[String],
+    width: u32,
+    height: u32,
+    spp: u32,
+) -> Resolved {
     let mut film = Film::new(width, height);
+    let channels = channels(aov_planes.len());
+    film.aovs = aov_planes
+        .iter()
+        .map(|name| AovPlane {
+            name: name.clone(),
+            rgb: vec![[0.0; 3]; film.pixel_count()],
+        })
+        .collect();
     let n = f64::from(spp);
     let n_even = f64::from(spp.div_ceil(2));
     let n_odd = f64::from(spp / 2);
-    let mut variance = vec![[0.0f32; 3]; sums.len()];
-    let mut even = vec![[0.0f32; 3]; sums.len()];
-    let mut odd = vec![[0.0f32; 3]; sums.len()];
+    let mut variance = vec![[0.0f32; 3]; film.pixel_count()];
+    let mut even = vec![[0.0f32; 3]; film.pixel_count()];
+    let mut odd = vec![[0.0f32; 3]; film.pixel_count()];
     let (mut non_finite, mut clamped, mut rays) = (0u64, 0u64, 0u64);
     // Offsets of the FilmPixel members in the flattened sums.
     const BEAUTY: usize = 0;
@@ -209,8 +308,14 @@ pub fn resolve(sums: &[[i128; FILM_CHANNELS]], width: u32, height: u32, spp: u32
     const NORMAL: usize = 12;
     const EMISSION: usize = 16;
     const BEAUTY_ODD: usize = 20;
-    for (i, s) in sums.iter().enumerate() {
+    for (i, s) in sums.chunks_exact(channels).enumerate() {
         let p: [f64; FILM_CHANNELS] = std::array::from_fn(|k| from_fixed(s[k], k));
+        for (k, plane) in film.aovs.iter_mut().enumerate() {
+            let at = FILM_CHANNELS + AOV_CHANNELS * k;
+            for c in 0..3 {
+                plane.rgb[i][c] = (from_fixed(s[at + c], at + c) / n) as f32;
+            }
+        }
         for c in 0..3 {
             let sum = p[BEAUTY + c];
             let mean = sum / n;
@@ -265,6 +370,25 @@ mod tests {
         let b: i128 = xs.iter().rev().map(|&x| to_fixed(x, 0)).sum();
         assert_eq!(a, b);
         assert_eq!(to_fixed(f32::NAN, 0), 0);
+    }
+
+    #[test]
+    fn aov_names_are_exr_layers_of_their_own() {
+        assert!(check_aov_names(&["Direct", "IndirectDiffuse", "Reflection", "A_2"]).is_ok());
+        assert!(check_aov_names::<&str>(&[]).is_ok());
+        for bad in [
+            &["direct"][..],
+            &["Albedo"],
+            &["N"],
+            &["Di rect"],
+            &[""],
+            &["A", "A"],
+        ] {
+            assert!(check_aov_names(bad).is_err(), "{bad:?}");
+        }
+        assert_eq!(channels(0), 24);
+        assert_eq!(channels(3), 36);
+        assert_eq!(fixed_bits(30), 64);
     }
 
     #[test]

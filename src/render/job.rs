@@ -3,7 +3,7 @@
 //! in one piece gives, bit for bit, because every film block is rendered whole by the jobs that
 //! share it and block sums add exactly (src/render/film.rs).
 
-use super::film::{self, FILM_CHANNELS, FilmSums, Window};
+use super::film::{self, FilmSums, Window};
 use super::{RenderOutput, RenderSettings};
 use crate::error::{Error, Result};
 use crate::output::Film;
@@ -14,18 +14,18 @@ use std::path::{Path, PathBuf};
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
 pub fn settings_text(s: &RenderSettings) -> String {
     let it = &s.integrator;
-    // The direct integrator's text predates the others (partial files from before still merge).
     let integrator = match it.kind {
         super::IntegratorKind::Direct => String::new(),
-        super::IntegratorKind::Path => format!("integrator=path max_depth={} ", it.max_depth),
+        super::IntegratorKind::Path => format!("max_depth={} ", it.max_depth),
         super::IntegratorKind::Full => format!(
-            "integrator=full specular_depth={} radiosity_cache={} ",
+            "specular_depth={} radiosity_cache={} ",
             it.specular_depth,
             if it.radiosity_cache { "on" } else { "off" }
         ),
     };
     format!(
-        "{integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} clamp={} nan_every={}",
+        "integrator={} {integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} clamp={} nan_every={}",
+        it.kind.name(),
         it.technique.name(),
         it.light_samples,
         it.brdf_samples,
@@ -118,6 +118,7 @@ pub fn part_info(
         device: device.to_string(),
         render_seconds: out.stats.render_seconds,
         setup_seconds: out.stats.setup_seconds,
+        aov_planes: out.job.sums.aov_planes.clone(),
     })
 }
 
@@ -155,8 +156,8 @@ fn part_error(path: &Path, field: &str, message: String) -> Error {
 }
 
 /// Checks that `parts` are the jobs of one image: same scene, seed, samples per pixel, settings,
-/// trace path and version; windows inside the frame; and in every cell cut by the windows'
-/// edges, sample ranges that tile 0..spp. Errors name the part and the field.
+/// AOV planes, trace path and version; windows inside the frame; and in every cell cut by the
+/// windows' edges, sample ranges that tile 0..spp. Errors name the part and the field.
 pub fn check(parts: &[PartHeader]) -> Result<()> {
     let first = parts
         .first()
@@ -164,7 +165,7 @@ pub fn check(parts: &[PartHeader]) -> Result<()> {
     let f = &first.info;
     for p in &parts[1..] {
         let i = &p.info;
-        let checks: [(&str, String, String); 7] = [
+        let checks: [(&str, String, String); 8] = [
             (
                 "illum.sceneHash",
                 i.scene_hash.clone(),
@@ -178,6 +179,11 @@ pub fn check(parts: &[PartHeader]) -> Result<()> {
                 format!("{:?}", f.frame),
             ),
             ("illum.settings", i.settings.clone(), f.settings.clone()),
+            (
+                "illum.aovPlanes",
+                format!("{:?}", i.aov_planes),
+                format!("{:?}", f.aov_planes),
+            ),
             ("illum.trace", i.trace.clone(), f.trace.clone()),
             ("illum.version", i.version.clone(), f.version.clone()),
         ];
@@ -266,7 +272,7 @@ pub fn check(parts: &[PartHeader]) -> Result<()> {
 
 /// FNV-1a of a block's float32 sums at one pixel: what a later copy of the block is checked
 /// against, without keeping the first copy.
-fn pixel_hash(v: &[f32; FILM_CHANNELS]) -> u64 {
+fn pixel_hash(v: &[f32]) -> u64 {
     let mut h = Fnv::new();
     h.write(bytemuck::cast_slice(v));
     h.0
@@ -277,20 +283,32 @@ fn pixel_hash(v: &[f32; FILM_CHANNELS]) -> u64 {
 struct Accumulator {
     width: u32,
     height: u32,
-    sums: Vec<[i128; FILM_CHANNELS]>,
+    aov_planes: Vec<String>,
+    /// Frame pixels, row-major, `channels` values each.
+    channels: usize,
+    sums: Vec<i128>,
     /// Per pixel: the boundary blocks added so far (start, hash of the copy added, its part).
     seen: Vec<Vec<(u32, u64, usize)>>,
 }
 
 impl Accumulator {
-    fn new(width: u32, height: u32) -> Accumulator {
+    fn new(width: u32, height: u32, aov_planes: Vec<String>) -> Accumulator {
         let n = width as usize * height as usize;
+        let channels = film::channels(aov_planes.len());
         Accumulator {
             width,
             height,
-            sums: vec![[0; FILM_CHANNELS]; n],
+            aov_planes,
+            channels,
+            sums: vec![0; n * channels],
             seen: vec![Vec::new(); n],
         }
+    }
+
+    /// An accumulator for the frame and planes of the checked parts `headers`.
+    fn for_parts(headers: &[PartHeader]) -> Accumulator {
+        let f = &headers[0].info;
+        Accumulator::new(f.frame.0, f.frame.1, f.aov_planes.clone())
     }
 
     /// Adds part `index` (of `headers`): its owned blocks, and each shared block it has that no
@@ -298,22 +316,34 @@ impl Accumulator {
     /// copies must agree).
     fn add(&mut self, headers: &[PartHeader], index: usize, sums: &FilmSums) -> Result<()> {
         let win = headers[index].info.window;
-        let w = self.width;
-        let at = |i: usize| {
+        let c = self.channels;
+        if sums.aov_planes != self.aov_planes || sums.window != win {
+            return Err(part_error(
+                &headers[index].path,
+                "illum.aovPlanes, illum.crop",
+                "its sums do not match its header".into(),
+            ));
+        }
+        let w = self.width as usize;
+        let row = win.width() as usize * c;
+        let at = |y: u32| (y as usize * w + win.x0 as usize) * c;
+        // A window row is a run of the frame's sums: add it as one slice.
+        for (y, src) in (win.y0..win.y1).zip(sums.sums.chunks_exact(row)) {
+            let dst = &mut self.sums[at(y)..at(y) + row];
+            for (a, x) in dst.iter_mut().zip(src) {
+                *a = a.saturating_add(*x);
+            }
+        }
+        let pixel = |i: usize| {
             let (x, y) = (
                 win.x0 + i as u32 % win.width(),
                 win.y0 + i as u32 / win.width(),
             );
-            (y * w + x) as usize
+            y as usize * w + x as usize
         };
-        for (i, s) in sums.sums.iter().enumerate() {
-            for (a, x) in self.sums[at(i)].iter_mut().zip(s) {
-                *a = a.saturating_add(*x);
-            }
-        }
         for b in &sums.boundary {
-            for (i, v) in b.sums.iter().enumerate() {
-                let px = at(i);
+            for (i, v) in b.sums.chunks_exact(c).enumerate() {
+                let px = pixel(i);
                 let hash = pixel_hash(v);
                 if let Some(&(_, h, q)) = self.seen[px].iter().find(|s| s.0 == b.start) {
                     if h != hash {
@@ -331,9 +361,7 @@ impl Accumulator {
                     continue;
                 }
                 self.seen[px].push((b.start, hash, index));
-                for (c, (a, x)) in self.sums[px].iter_mut().zip(v).enumerate() {
-                    *a = a.saturating_add(film::to_fixed(*x, c));
-                }
+                film::add_block(&mut self.sums[px * c..(px + 1) * c], v, c);
             }
         }
         Ok(())
@@ -341,7 +369,7 @@ impl Accumulator {
 
     fn finish(self, headers: &[PartHeader]) -> Merged {
         let f = &headers[0].info;
-        let r = film::resolve(&self.sums, self.width, self.height, f.spp);
+        let r = film::resolve(&self.sums, &self.aov_planes, self.width, self.height, f.spp);
         let mut devices: Vec<String> = headers.iter().map(|p| p.info.device.clone()).collect();
         devices.sort();
         devices.dedup();
@@ -371,8 +399,7 @@ pub fn merge(parts: &[Part]) -> Result<Merged> {
         })
         .collect();
     check(&headers)?;
-    let (w, h) = headers[0].info.frame;
-    let mut acc = Accumulator::new(w, h);
+    let mut acc = Accumulator::for_parts(&headers);
     for (k, p) in parts.iter().enumerate() {
         acc.add(&headers, k, &p.sums)?;
     }
@@ -390,8 +417,7 @@ pub fn merge_files(paths: &[PathBuf]) -> Result<Merged> {
         });
     }
     check(&headers)?;
-    let (w, h) = headers[0].info.frame;
-    let mut acc = Accumulator::new(w, h);
+    let mut acc = Accumulator::for_parts(&headers);
     for (k, path) in paths.iter().enumerate() {
         let (info, sums) = crate::output::partial::read_partial(path)?;
         if info != headers[k].info {

@@ -230,25 +230,29 @@ impl Renderer {
             film_usage,
             MemoryLocation::GpuOnly,
         )?;
-        let planes = integrator.aov_planes().len() as u64;
-        let aov_buffer = if planes > 0 {
-            Some(ctx.create_buffer(
+        // The integrator's AOV planes: pixels x planes vec4 sums, [pixel][plane].
+        let aov_planes: Vec<String> = integrator
+            .aov_planes()
+            .iter()
+            .map(|p| p.to_string())
+            .collect();
+        film::check_aov_names(&aov_planes)
+            .map_err(|e| Error::Invalid(format!("integrator {}: {e}", integrator.name())))?;
+        let aov_buffer = match aov_planes.len() {
+            0 => None,
+            p => Some(ctx.create_buffer(
                 "aovs",
-                pixels * planes * 16,
+                pixels * p as u64 * (film::AOV_CHANNELS * 4) as u64,
                 film_usage,
                 MemoryLocation::GpuOnly,
-            )?)
-        } else {
-            None
+            )?),
         };
-        let clear_film = || -> Result<()> {
-            film::clear(ctx, &film_buffer)?;
-            if let Some(a) = &aov_buffer {
-                film::clear(ctx, a)?;
-            }
-            Ok(())
+        let device_film = film::DeviceFilm {
+            film: &film_buffer,
+            aovs: aov_buffer.as_ref(),
+            aov_planes: aov_planes.len(),
         };
-        clear_film()?;
+        film::clear(ctx, device_film)?;
         kernel.bind(&frame, &film_buffer, aov_buffer.as_ref());
         let timer = GpuTimer::new(ctx)?;
         let evaluate = settings.evaluate_passes || settings.reference.is_some();
@@ -294,11 +298,11 @@ impl Renderer {
         for (index, &seed) in seeds.iter().enumerate() {
             let t0 = if index == 0 { t0 } else { Instant::now() };
             if index > 0 {
-                clear_film()?;
+                film::clear(ctx, device_film)?;
             }
             let mut interrupted = false;
             let (mut done, mut wall, mut device) = (0u32, 0.0f64, 0.0f64);
-            let mut sums = FilmSums::new(window);
+            let mut sums = FilmSums::new(window, aov_planes.clone());
             let mut passes = Vec::new();
             let mut last_resolved = None;
             while done < budget && !interrupted {
@@ -349,7 +353,7 @@ impl Renderer {
                     if s + n == block_end {
                         // The block is complete: exact sums if the job owns all of it, else kept
                         // whole as a boundary block.
-                        let block = film::download_window(ctx, &film_buffer, w, window)?;
+                        let block = film::download_window(ctx, device_film, w, window)?;
                         if block_start >= range.0 && block_end <= range.1 {
                             sums.add_block(&block);
                         } else {
@@ -359,7 +363,7 @@ impl Renderer {
                                 sums: block,
                             });
                         }
-                        clear_film()?;
+                        film::clear(ctx, device_film)?;
                     }
                     progress(done + k, budget);
                     if cancelled() {
@@ -385,9 +389,15 @@ impl Renderer {
                     // Reads the unfinished block without moving it: the block grid stays fixed.
                     let mut peek = sums.with_boundary();
                     if (first + done) % FILM_BLOCK != 0 && first + done != last {
-                        peek.add_block(&film::download_window(ctx, &film_buffer, w, window)?);
+                        peek.add_block(&film::download_window(ctx, device_film, w, window)?);
                     }
-                    let r = film::resolve(&peek.sums, window.width(), window.height(), done);
+                    let r = film::resolve(
+                        &peek.sums,
+                        &aov_planes,
+                        window.width(),
+                        window.height(),
+                        done,
+                    );
                     evaluate_pass(&mut report, &r, settings.reference.as_deref());
                     passes.push(report);
                     last_resolved = Some(r);
@@ -398,13 +408,14 @@ impl Renderer {
             }
             if done < budget {
                 // A time budget ended the render inside a block: keep what was rendered.
-                let block = film::download_window(ctx, &film_buffer, w, window)?;
+                let block = film::download_window(ctx, device_film, w, window)?;
                 sums.add_block(&block);
             }
             let resolved = match last_resolved {
                 Some(r) if r.spp == done => r,
                 _ => film::resolve(
                     &sums.with_boundary().sums,
+                    &aov_planes,
                     window.width(),
                     window.height(),
                     done,

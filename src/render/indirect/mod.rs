@@ -179,6 +179,14 @@ impl IntegratorPasses for FullKernels {
 
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
         dispatch_tile(&self.film, cmd, pass);
+        if pass.sample_count == 0
+            && self.off_reason.borrow().is_empty()
+            && let Some(c) = self.cache.borrow().as_ref()
+        {
+            // The driver's warm-up pass (no samples): drivers that compile at the first dispatch
+            // compile the update kernel now, outside the timed passes.
+            c.record_empty(cmd);
+        }
     }
 
     fn report(&self) -> Vec<(String, String)> {

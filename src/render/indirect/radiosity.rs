@@ -45,7 +45,7 @@ use std::time::Instant;
 const VERTICES: u32 = 3;
 /// Most cells (the table has twice as many slots) and most bytes of records per dispatch.
 const MAX_SLOTS: u32 = 1 << 20;
-const MAX_RECORD_BYTES: u64 = 64 << 20;
+const MAX_RECORD_BYTES: u64 = 8 << 20;
 /// Update paths come one per BLOCK x BLOCK pixels, at most MAX_PATHS per sample index.
 const BLOCK: u32 = 4;
 const MAX_PATHS: u32 = 1 << 16;
@@ -56,7 +56,7 @@ const MAX_WARMUP: u32 = 64;
 const WARMUP_INDEX: u32 = 0x8000_0000;
 /// Update paths per warm-up round at least (small images get several rounds of indices), so
 /// that every cell in use is refreshed by each generation.
-const WARMUP_PATHS: u32 = 4096;
+const WARMUP_PATHS: u32 = 1024;
 /// Cells not refreshed in this many generations are dropped: lookups there fall back to a
 /// coarser level or a bounce in place, rather than to a value many bounces behind.
 const MAX_AGE: u32 = 8;
@@ -196,6 +196,16 @@ impl RadiosityCache {
     /// The update kernel, for a cache of another shape.
     pub fn into_pipeline(self) -> ComputePipeline {
         self.update
+    }
+
+    /// An update dispatch with no paths (see FullKernels::record).
+    pub fn record_empty(&self, cmd: vk::CommandBuffer) {
+        let pc = RadiosityPass {
+            records: self.state.borrow().records.address,
+            ..Default::default()
+        };
+        self.update
+            .dispatch(cmd, bytemuck::bytes_of(&pc), [1, 1, 1]);
     }
 
     /// Points the frame constants at the table.
