@@ -19,10 +19,7 @@
 
 #include "direct.glsl"
 
-// Bounces done in place (with the cache) before a cell must serve: segments shorter than their
-// cell and empty cells continue the path instead of reading the cache.
-#define RADIOSITY_INLINE 4u
-// Most diffuse bounces of the brute-force estimate (Russian roulette ends paths long before).
+// Most diffuse bounces done in place (Russian roulette ends paths long before).
 #define RADIOSITY_BRUTE_MAX 256u
 // Safety cap on the vertices of one path (Russian roulette ends paths long before).
 #define PATH_MAX_VERTICES 1024u
@@ -101,15 +98,17 @@ Bounce sample_bounce(Shading sh, GpuMaterial m, bool diffuse, bool specular, ino
 
 // ---------------------------------------------------------------------------------------------
 // The radiosity cache: a hashed grid of cells at power-of-two sizes, keyed by cell coordinates,
-// level and the octant of the normal (both sides of a thin wall stay apart).
+// level and the normal's dominant signed axis (both sides of a thin wall, and two walls meeting
+// at an edge, stay apart).
 
 layout(buffer_reference, scalar, buffer_reference_align = 8) readonly buffer RadiosityTableRef { RadiosityEntry v[]; };
 
 bool radiosity_cache_on() { return frame.radiosity_table != uint64_t(0); }
 
+// The level whose cells are at most `width` across (and more than half of it).
 uint radiosity_level(float width) {
     float r = width / frame.radiosity_cell;
-    int l = r <= 1.0 ? 0 : int(ceil(log2(r)));
+    int l = r <= 1.0 ? 0 : int(floor(log2(r)));
     return uint(clamp(l, 0, int(frame.radiosity_levels) - 1));
 }
 
@@ -118,14 +117,17 @@ float radiosity_cell_size(uint level) { return frame.radiosity_cell * exp2(float
 uvec2 radiosity_key(vec3 p, vec3 n, uint level) {
     ivec3 c = ivec3(clamp(floor(p / radiosity_cell_size(level)), vec3(-2e9), vec3(2e9)));
     uvec3 u = uvec3(c);
-    uint tag = level * 8u + (n.x >= 0.0 ? 1u : 0u) + (n.y >= 0.0 ? 2u : 0u) + (n.z >= 0.0 ? 4u : 0u);
+    // The normal's dominant axis and its sign: walls that meet at an edge stay apart.
+    vec3 a = abs(n);
+    uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
+    uint tag = level * 6u + 2u * axis + (n[axis] >= 0.0 ? 1u : 0u);
     uint h1 = hash_u32(u.x ^ hash_u32(u.y ^ hash_u32(u.z ^ hash_u32(tag))));
     uint h2 = hash_u32((u.x * 0x9e3779b1u) ^ hash_u32((u.y * 0x85ebca6bu) ^ hash_u32((u.z * 0xc2b2ae35u) ^ (tag + 0x27d4eb2fu))));
     return uvec2(h1, h2 | 1u);
 }
 
-// Level of the r-th key of a record: the footprint's level, then the next two coarser ones
-// (consecutive, so that a lookup whose footprint is up to two levels off still finds it).
+// Level of the r-th key of a record: the footprint's level, then the next coarser one (so that a
+// lookup whose footprint is a level off still finds it).
 uint radiosity_record_level(uint level, uint r) { return min(level + r, frame.radiosity_levels - 1u); }
 
 bool radiosity_find(uvec2 key, out vec3 value) {
@@ -161,13 +163,13 @@ bool radiosity_lookup(Shading sh, float width, inout Rng rng, out vec3 value) {
 // Outgoing diffuse radiance B = rho/pi E (emission excluded) at the surface that ray (o, d) hit
 // (h), for a cone of `width` there and spread `angle`. With the cache: the cached value where the
 // segment is longer than the cell (SHaRC's rule) and the cell has one; otherwise one more diffuse
-// bounce in place, at most RADIOSITY_INLINE. Without the cache: brute force, a diffuse-only path
-// with next-event estimation at every vertex and Russian roulette after three bounces.
+// bounce in place. Without the cache: brute force, a diffuse-only path with next-event estimation
+// at every vertex. Either way Russian roulette ends paths after three bounces in place, so a miss
+// costs time, never bias.
 vec3 radiosity_along(Hit h, vec3 o, vec3 d, float width, float angle, inout Rng rng) {
     bool cache = radiosity_cache_on();
     vec3 sum = vec3(0.0), thr = vec3(1.0);
-    uint steps = cache ? RADIOSITY_INLINE : RADIOSITY_BRUTE_MAX;
-    for (uint k = 0u; k < steps; ++k) {
+    for (uint k = 0u; k < RADIOSITY_BRUTE_MAX; ++k) {
         if (h.kind == HIT_NONE) break;
         Surface s = surface_at(h, o, d);
         if (s.material == NONE) break;   // a light's surface: direct lighting's
@@ -187,7 +189,7 @@ vec3 radiosity_along(Hit h, vec3 o, vec3 d, float width, float angle, inout Rng 
         vec3 wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
         if (!(c.z > 0.0) || dot(wi, sh.ng) <= 0.0) break;
         thr *= sh.albedo;
-        if (!cache && k >= 2u) {
+        if (k >= 2u) {
             float q = min(max3(thr), 0.95);
             if (rng_next(rng) >= q) break;
             thr /= q;

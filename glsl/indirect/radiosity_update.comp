@@ -23,8 +23,7 @@ void main() {
     RadiosityRecord none;
     none.value = vec3(0.0);
     none.valid = 0u;
-    none.keys[0] = none.keys[1] = none.keys[2] = uvec2(0u);
-    none.pad = uvec2(0u);
+    none.keys[0] = none.keys[1] = uvec2(0u);
     for (uint v = 0u; v < pc.vertices; ++v) records.v[base + v] = none;
 
     // A random stream apart from the camera samples' (another seed word).
@@ -84,7 +83,6 @@ void main() {
         uint level = radiosity_level(width);
         for (uint k = 0u; k < RADIOSITY_RECORD_KEYS; ++k)
             r.keys[k] = radiosity_key(sh.p, sh.ng, radiosity_record_level(level, k));
-        r.pad = uvec2(0u);
         records.v[base + v] = r;
         o = sh.origin;
         d = wi;

@@ -115,9 +115,9 @@
 #define INTEGRATOR_DIFFUSE_MIS 1
 // Radiosity cache (src/render/indirect/radiosity.rs): a world-space hashed grid. Lookups probe at
 // most RADIOSITY_PROBES consecutive entries; each update record names its cell at
-// RADIOSITY_RECORD_KEYS levels (the footprint's, then the next coarser ones).
+// RADIOSITY_RECORD_KEYS levels (the footprint's, then the next coarser one).
 #define RADIOSITY_PROBES 16
-#define RADIOSITY_RECORD_KEYS 3
+#define RADIOSITY_RECORD_KEYS 2
 
 // Hit kinds reported by the trace interface.
 #define HIT_NONE 0
@@ -400,8 +400,7 @@ struct RadiosityEntry {
 struct RadiosityRecord {
     vec3 value;
     uint valid;               // 0: no sample (the path ended earlier)
-    uvec2 keys[3];
-    uvec2 pad;
+    uvec2 keys[2];
 };
 
 // Push constants of glsl/indirect/radiosity_update.comp.
