@@ -26,7 +26,12 @@ fn settings(kind: IntegratorKind, spp: u32) -> RenderSettings {
     }
 }
 
-fn render_seeds(ctx: &illum::vk::Context, scene: &Scene, s: &RenderSettings, seeds: &[u64]) -> Vec<RenderOutput> {
+fn render_seeds(
+    ctx: &illum::vk::Context,
+    scene: &Scene,
+    s: &RenderSettings,
+    seeds: &[u64],
+) -> Vec<RenderOutput> {
     Renderer::new(ctx.clone())
         .render_seeds(scene, s, seeds, &mut |_, _| {})
         .unwrap_or_else(|e| panic!("render failed: {e}"))
@@ -93,23 +98,80 @@ fn furnace(rho: f64) -> Scene {
     ))
 }
 
+/// The furnace (TECHNIQUES §6.3): Le / (1 - rho) in every pixel. The path tracer is unbiased:
+/// within statistics (seed scatter). The full integrator's cache is biased by the lag of its
+/// Jacobi iteration, which its warm-up takes below 1e-3 of the indirect light (radiosity.rs):
+/// the limit adds that bound to the statistics.
 #[test]
-fn furnace_explore() {
+fn the_furnace_reads_le_over_one_minus_rho() {
     let ctx = context();
+    let seeds: Vec<u64> = (1..=8).collect();
     for rho in [0.5, 0.9] {
         let truth = 1.0 / (1.0 - rho);
+        let indirect = truth - 1.0 - rho;
         let s = furnace(rho);
-        for kind in [IntegratorKind::Path, IntegratorKind::Full] {
-            let outs = render_seeds(&ctx, &s, &settings(kind, 16), &[1, 2, 3, 4, 5, 6, 7, 8]);
-            let m = mean_and_error(&block_means(&outs, 12));
-            eprintln!("rho {rho} {kind:?}: {:.6} ± {:.6} (truth {truth}) rel {:.2e}", m[0].0, m[0].1, m[0].0 / truth - 1.0);
+        for (kind, bias) in [
+            (IntegratorKind::Path, 0.0),
+            (IntegratorKind::Full, 1e-3 * indirect),
+        ] {
+            let outs = render_seeds(&ctx, &s, &settings(kind, 16), &seeds);
+            let (m, se) = mean_and_error(&block_means(&outs, 12))[0];
+            let limit = bias + 4.0 * se;
+            assert!(
+                (m - truth).abs() <= limit,
+                "rho {rho}, {kind:?}: {m:.6} +- {se:.6} for {truth} (limit {limit:.2e})"
+            );
+            // The split sums to the beauty, and Direct is emission plus rho Le exactly.
+            let f = &outs[0].film;
+            let d = plane(f, "Direct");
+            assert!(
+                d.iter()
+                    .all(|p| (f64::from(p[0]) - (1.0 + rho)).abs() < 1e-5)
+            );
         }
     }
     assert_no_validation_messages(&ctx);
 }
 
+/// An open plane under a uniform dome sees nothing but the dome, which direct lighting has:
+/// indirect light adds exactly nothing, in both integrators, on a diffuse and glossy plane.
+#[test]
+fn an_open_plane_under_a_uniform_dome_gets_no_indirect_light() {
+    let ctx = context();
+    let s = scene(
+        r#"{"camera": {"position": [0, 2, 3], "look_at": [0, 0, 0], "fov_y": 50, "resolution": [12, 9]},
+            "materials": {"m": {"diffuse": [0.6, 0.5, 0.4],
+                                "specular": [{"model": "ggx", "roughness": 0.3, "fresnel": {"schlick": [0.04, 0.04, 0.04]}}]}},
+            "shapes": {"plane": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [100, 100]}, "material": "m"}},
+            "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 1}}}"#,
+    );
+    for kind in [IntegratorKind::Path, IntegratorKind::Full] {
+        let out = &render_seeds(&ctx, &s, &settings(kind, 8), &[3])[0];
+        let f = &out.film;
+        for name in ["IndirectDiffuse", "Reflection"] {
+            assert!(
+                plane(f, name).iter().all(|p| *p == [0.0; 3]),
+                "{kind:?}: {name} is not 0"
+            );
+        }
+        assert_eq!(
+            plane(f, "Direct"),
+            &f.beauty[..],
+            "{kind:?}: Direct is not the beauty"
+        );
+        assert!(
+            f.beauty.iter().all(|p| p[0] > 0.0),
+            "{kind:?}: the plane is lit"
+        );
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// The interior scene at 48x36, or with every material diffuse.
 fn interior(diffuse_only: bool) -> Scene {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/interior.json")).unwrap();
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/interior.json"))
+            .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["camera"]["resolution"] = serde_json::json!([48, 36]);
     if diffuse_only {
@@ -119,35 +181,177 @@ fn interior(diffuse_only: bool) -> Scene {
     scene(&v.to_string())
 }
 
+/// Compares 6x6-pixel block means of two renders, each over 8 seeds: every block within
+/// `bias` (relative) plus the Šidák-corrected statistics of the seeds' scatter.
+fn assert_blocks_agree(a: &[RenderOutput], b: &[RenderOutput], bias: f64, what: &str) {
+    let (ma, mb) = (
+        mean_and_error(&block_means(a, 6)),
+        mean_and_error(&block_means(b, 6)),
+    );
+    let z = sidak_z(ma.len());
+    for (i, (x, y)) in ma.iter().zip(&mb).enumerate() {
+        let limit = bias * y.0.abs() + z * (x.1 * x.1 + y.1 * y.1).sqrt();
+        assert!(
+            (x.0 - y.0).abs() <= limit,
+            "{what}: block {i}: {:.5} +- {:.5} vs {:.5} +- {:.5} (limit {limit:.2e})",
+            x.0,
+            x.1,
+            y.0,
+            y.1
+        );
+    }
+}
+
+/// The cache's bias on the interior scene, relative, per 6x6 block at 32 spp: the cell blur
+/// (at most 0.15 t across, read through a cosine-weighted bounce) plus the warm-up's lag.
+/// Measured below 2% with 8 seeds (worst block |z| 3.4); stated as 3%.
+const CACHE_BIAS: f64 = 0.03;
+
+/// The cache against brute force (the same partition, --radiosity-cache off) on the interior
+/// scene, and full against path on its diffuse-only version, where no caustic paths exist.
 #[test]
-fn interior_explore() {
+fn the_cache_agrees_with_brute_force_and_full_with_path_where_no_caustics_exist() {
     let ctx = context();
     let seeds: Vec<u64> = (1..=8).collect();
-    for (name, s, a, b) in [
-        ("cache vs off", interior(false), IntegratorKind::Full, None),
-        ("full vs path (diffuse)", interior(true), IntegratorKind::Full, Some(IntegratorKind::Path)),
-    ] {
-        let ra = render_seeds(&ctx, &s, &settings(a, 32), &seeds);
-        let mut sb = settings(b.unwrap_or(a), 32);
-        if b.is_none() {
-            sb.integrator.radiosity_cache = false;
+    let s = interior(false);
+    let cached = render_seeds(&ctx, &s, &settings(IntegratorKind::Full, 32), &seeds);
+    let mut off = settings(IntegratorKind::Full, 32);
+    off.integrator.radiosity_cache = false;
+    let brute = render_seeds(&ctx, &s, &off, &seeds);
+    assert_blocks_agree(&cached, &brute, CACHE_BIAS, "cache vs brute force");
+    assert!(
+        brute[0]
+            .stats
+            .integrator
+            .iter()
+            .any(|(_, v)| v.starts_with("off"))
+    );
+    // The AOVs sum to the beauty (up to float32 rounding of the per-sample sums).
+    for o in cached.iter().chain(&brute).take(9) {
+        let f = &o.film;
+        let (d, i, r) = (
+            plane(f, "Direct"),
+            plane(f, "IndirectDiffuse"),
+            plane(f, "Reflection"),
+        );
+        for (k, b) in f.beauty.iter().enumerate() {
+            for c in 0..3 {
+                let sum = d[k][c] + i[k][c] + r[k][c];
+                assert!(
+                    (sum - b[c]).abs() <= 1e-5 * b[c].abs().max(1e-3),
+                    "pixel {k}: Direct + IndirectDiffuse + Reflection = {sum}, beauty {}",
+                    b[c]
+                );
+            }
         }
-        let rb = render_seeds(&ctx, &s, &sb, &seeds);
-        let ma = mean_and_error(&block_means(&ra, 6));
-        let mb = mean_and_error(&block_means(&rb, 6));
-        let mut worst = (0.0f64, 0.0f64);
-        for (i, (x, y)) in ma.iter().zip(&mb).enumerate() {
-            eprintln!("block {i}: {:.4} ± {:.4} vs {:.4} ± {:.4}", x.0, x.1, y.0, y.1);
-            let z = (x.0 - y.0) / (x.1 * x.1 + y.1 * y.1).sqrt();
-            let rel = (x.0 - y.0) / y.0;
-            if z.abs() > worst.0.abs() { worst.0 = z; }
-            if rel.abs() > worst.1.abs() { worst.1 = rel; }
-        }
-        let ta: f64 = ra.iter().map(|o| o.stats.render_seconds).sum();
-        let tb: f64 = rb.iter().map(|o| o.stats.render_seconds).sum();
-        eprintln!("{name}: worst z {:.2}, worst rel {:.3}, {} blocks, sidak {:.2}; times {ta:.2} / {tb:.2}", worst.0, worst.1, ma.len(), sidak_z(ma.len()));
-        eprintln!("{:?}", ra[0].stats.integrator);
     }
-    let _ = Arc::new(Mutex::new(0));
+    let s = interior(true);
+    let full = render_seeds(&ctx, &s, &settings(IntegratorKind::Full, 32), &seeds);
+    let path = render_seeds(&ctx, &s, &settings(IntegratorKind::Path, 32), &seeds);
+    assert_blocks_agree(&full, &path, CACHE_BIAS, "full vs path, diffuse only");
+    assert_no_validation_messages(&ctx);
+}
+
+/// The cache is a function of the seed and the sample index alone: a full render split into
+/// sample ranges (across cache generations) and crops merges bit-identically with the render in
+/// one piece.
+#[test]
+fn a_split_full_render_merges_bit_identically() {
+    use illum::render::Window;
+    use illum::render::job::{Part, merge, part_info};
+    let ctx = context();
+    let s = interior(false);
+    let r = Renderer::new(ctx.clone());
+    let base = settings(IntegratorKind::Full, 12);
+    let whole = r.render(&s, &base, &mut |_, _| {}).unwrap();
+    let mut parts = Vec::new();
+    for crop in [
+        Window {
+            x0: 0,
+            y0: 0,
+            x1: 48,
+            y1: 20,
+        },
+        Window {
+            x0: 0,
+            y0: 20,
+            x1: 48,
+            y1: 36,
+        },
+    ] {
+        for range in [(0, 3), (3, 12)] {
+            let mut js = base.clone();
+            js.samples = Some(range);
+            js.crop = Some(crop);
+            let out = r.render(&s, &js, &mut |_, _| {}).unwrap();
+            parts.push(Part {
+                path: temp_path(&format!("full-part-{}-{}.exr", crop.y0, range.0)),
+                info: part_info(&s, &js, &out, "test").unwrap(),
+                sums: out.job.sums,
+            });
+        }
+    }
+    let merged = merge(&parts).unwrap();
+    assert_eq!(
+        merged.film, whole.film,
+        "split full render differs from one render"
+    );
+    assert_no_validation_messages(&ctx);
+}
+
+/// The cache is left out (no update kernel, no buffer, no dispatch) where nothing could read
+/// it: no diffuse material, no light, or the cache turned off; and `path` with max_depth 1 is
+/// emission only, with 2 direct lighting only.
+#[test]
+fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() {
+    let ctx = context();
+    let kernels = Arc::new(Mutex::new(Vec::<String>::new()));
+    let k2 = kernels.clone();
+    ctx.set_kernel_listener(Some(Arc::new(move |name: &str| {
+        k2.lock().unwrap().push(name.to_string())
+    })));
+    let no_diffuse = scene(
+        r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0, 0], "fov_y": 50, "resolution": [8, 6]},
+            "materials": {"chrome": {"diffuse": [0, 0, 0], "specular": [{"model": "ggx", "roughness": 0.2, "fresnel": {"schlick": [0.9, 0.9, 0.9]}}]}},
+            "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1}, "material": "chrome"}},
+            "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 1}}}"#,
+    );
+    let out = &render_seeds(&ctx, &no_diffuse, &settings(IntegratorKind::Full, 2), &[1])[0];
+    let report = &out.stats.integrator;
+    assert!(
+        report
+            .iter()
+            .any(|(k, v)| k == "radiosityCache" && v.contains("no diffuse material")),
+        "{report:?}"
+    );
+    let mut off = settings(IntegratorKind::Full, 2);
+    off.integrator.radiosity_cache = false;
+    render_seeds(&ctx, &furnace(0.5), &off, &[1]);
+    assert!(
+        !kernels
+            .lock()
+            .unwrap()
+            .iter()
+            .any(|k| k == "radiosity_update"),
+        "an update kernel was created: {:?}",
+        kernels.lock().unwrap()
+    );
+    // max_depth: 1 = emission seen directly, 2 = plus direct lighting.
+    let s = furnace(0.5);
+    let mut p = settings(IntegratorKind::Path, 2);
+    p.integrator.max_depth = 1;
+    let one = &render_seeds(&ctx, &s, &p, &[1])[0].film;
+    assert!(
+        one.beauty.iter().all(|b| *b == [1.0; 3]),
+        "max_depth 1 is emission only"
+    );
+    p.integrator.max_depth = 2;
+    let two = &render_seeds(&ctx, &s, &p, &[1])[0].film;
+    assert!(
+        two.beauty.iter().all(|b| (b[0] - 1.5).abs() < 1e-5),
+        "max_depth 2 is emission plus direct lighting: {:?}",
+        two.beauty[0]
+    );
+    ctx.set_kernel_listener(None);
     assert_no_validation_messages(&ctx);
 }

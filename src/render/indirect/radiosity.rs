@@ -81,8 +81,7 @@ impl CacheShape {
         // Cells are at most half the slots; a generation's records name up to `keys` cells and
         // cells live MAX_AGE generations: 8x (measured on scenes/interior.json at 320x240:
         // 2x evicted live cells and cost 25% more time in bounces done in place).
-        let keys =
-            u64::from(paths.max(WARMUP_PATHS)) * u64::from(VERTICES * RADIOSITY_RECORD_KEYS);
+        let keys = u64::from(paths.max(WARMUP_PATHS)) * u64::from(VERTICES * RADIOSITY_RECORD_KEYS);
         let slots = (16 * keys)
             .next_power_of_two()
             .clamp(1 << 12, u64::from(MAX_SLOTS)) as u32;
