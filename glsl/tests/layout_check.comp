@@ -24,6 +24,7 @@ layout(scalar, binding = 15) buffer B15 { QueryHit query_hit_v[]; };
 layout(scalar, binding = 16) buffer B16 { QueryConstants query_constants_v[]; };
 layout(scalar, binding = 17) buffer B17 { GpuDomeSampling dome_sampling_v[]; };
 layout(scalar, binding = 18) buffer B18 { GpuLightNode light_node_v[]; };
+layout(scalar, binding = 19) buffer B19 { GpuLightTreeNode light_tree_node_v[]; };
 void main() {
     uint i = gl_GlobalInvocationID.x;
     frame_v[i + 1] = frame_v[i];
@@ -37,6 +38,7 @@ void main() {
     texture_v[i + 1] = texture_v[i];
     film_v[i + 1] = film_v[i];
     light_node_v[i + 1] = light_node_v[i];
+    light_tree_node_v[i + 1] = light_tree_node_v[i];
     dome_sampling_v[i + 1] = dome_sampling_v[i];
     bvh_header_v[i + 1] = bvh_header_v[i];
     bvh_node_v[i + 1] = bvh_node_v[i];

@@ -133,6 +133,10 @@ pub struct IntegratorArgs {
     /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
     #[arg(long)]
     pub diffuse_mis: bool,
+    /// How light samples pick lights in scenes of more than 8 lights: tree (the light tree), scan
+    /// (a linear scan over every light, as before the tree) or loop (every light at every point).
+    #[arg(long, default_value = "tree")]
+    pub light_selection: crate::render::LightSelection,
 }
 
 impl IntegratorArgs {
@@ -145,6 +149,7 @@ impl IntegratorArgs {
             light_samples: self.light_samples,
             brdf_samples: self.brdf_samples,
             diffuse_mis: self.diffuse_mis,
+            light_selection: self.light_selection,
         }
     }
 }

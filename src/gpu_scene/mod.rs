@@ -4,6 +4,7 @@
 //! conversion to f32: a scene 1e5 units from the origin keeps the precision of one at the origin.
 
 pub mod dome;
+pub mod light_tree;
 mod lights;
 
 use crate::error::Result;
@@ -51,6 +52,15 @@ pub struct GpuScene {
     pub index_buffer: Option<Buffer>,
     pub aabb_buffer: Option<Buffer>,
     _buffers: Vec<Buffer>,
+}
+
+/// Mean RGB of a texture's texels (a textured emitter's power counts at its mean).
+fn texture_mean(t: &crate::scene::Texture) -> Vec3 {
+    let sum = t
+        .texels
+        .iter()
+        .fold(glam::DVec3::ZERO, |a, v| a + v.truncate().as_dvec3());
+    (sum / t.texels.len().max(1) as f64).as_vec3()
 }
 
 fn v4(v: DVec3, w: f64) -> [f32; 4] {
@@ -498,6 +508,18 @@ impl GpuScene {
         let light_bvh = lights::build(&lights);
         let light_node_buffer = upload(ctx, "light BVH nodes", &light_bvh.nodes, storage)?;
         let light_ref_buffer = upload(ctx, "light BVH references", &light_bvh.refs, storage)?;
+        // The light tree that light samples descend when there are too many lights to loop over.
+        let mean_texel = |t: u32| texture_mean(&scene.textures[t as usize]);
+        let tree = if lights.len() > DIRECT_LOOP_LIGHTS as usize {
+            features |= FEATURE_MANY_LIGHTS;
+            light_tree::build(&lights, &mean_texel)?
+        } else {
+            None
+        };
+        let tree_nodes = tree.as_ref().map_or(&[][..], |t| &t.nodes[..]);
+        let light_tree_buffer = upload(ctx, "light tree", tree_nodes, storage)?;
+        let trails = tree.as_ref().map_or(&[][..], |t| &t.trails[..]);
+        let light_trail_buffer = upload(ctx, "light trails", trails, storage)?;
         // Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
         let mut dome_table = None;
         let mut dome_sampling = None;
@@ -534,6 +556,9 @@ impl GpuScene {
             light_bvh_nodes: light_bvh.nodes.len() as u32,
             infinite_first: light_bvh.infinite_first,
             infinite_count: light_bvh.infinite_count,
+            light_tree: addr(&light_tree_buffer),
+            light_trails: addr(&light_trail_buffer),
+            light_tree_nodes: tree_nodes.len() as u32,
             // The camera (set_camera), the integrator and film settings are set by the renderer.
             ..Default::default()
         };
@@ -565,6 +590,8 @@ impl GpuScene {
                 dome_sampling,
                 light_node_buffer,
                 light_ref_buffer,
+                light_tree_buffer,
+                light_trail_buffer,
             ]
             .into_iter()
             .flatten()

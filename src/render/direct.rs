@@ -3,7 +3,7 @@
 //! Lighting at Pixar" does (TECHNIQUES.md §3).
 
 use super::integrator::{Integrator, IntegratorPasses};
-use super::{IntegratorSettings, PreparedScene, Technique};
+use super::{IntegratorSettings, LightSelection, PreparedScene, Technique};
 use crate::error::Result;
 use crate::gpu_scene::GpuScene;
 use crate::layout::*;
@@ -75,6 +75,12 @@ impl Integrator for Direct {
             INTEGRATOR_DIFFUSE_MIS
         } else {
             0
+        };
+        // Without finite lights there is no tree: the (infinite) lights are looped over.
+        frame.light_select = match it.light_selection {
+            LightSelection::Tree if frame.light_tree != 0 => LIGHT_SELECT_TREE,
+            LightSelection::Scan => LIGHT_SELECT_SCAN,
+            _ => LIGHT_SELECT_LOOP,
         };
     }
 

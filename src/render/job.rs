@@ -15,11 +15,12 @@ use std::path::{Path, PathBuf};
 pub fn settings_text(s: &RenderSettings) -> String {
     let it = &s.integrator;
     format!(
-        "technique={} light_samples={} brdf_samples={} diffuse_mis={} clamp={} nan_every={}",
+        "technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} clamp={} nan_every={}",
         it.technique.name(),
         it.light_samples,
         it.brdf_samples,
         it.diffuse_mis,
+        it.light_selection.name(),
         s.clamp.map_or("off".into(), |c| c.to_string()),
         s.inject_non_finite
     )

@@ -17,7 +17,7 @@ mod settings;
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
-pub use settings::{IntegratorSettings, RenderSettings, Technique};
+pub use settings::{IntegratorSettings, LightSelection, RenderSettings, Technique};
 
 use crate::error::{Error, Result};
 use crate::layout::*;
