@@ -3,6 +3,7 @@
 //! renderer, outputs and reports, which know nothing of the command line.
 
 pub mod bench;
+pub mod bench_lights;
 pub mod compare;
 pub mod devices;
 pub mod merge;
