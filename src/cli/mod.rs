@@ -134,7 +134,7 @@ pub struct IntegratorArgs {
     /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
     #[arg(long)]
     pub diffuse_mis: bool,
-    /// How light samples pick lights in scenes of more than 8 lights: tree (the light tree), scan
+    /// How light samples pick lights in scenes of more than 32 lights: tree (the light tree), scan
     /// (a linear scan over every light, as before the tree) or loop (every light at every point).
     #[arg(long, default_value = "tree")]
     pub light_selection: crate::render::LightSelection,
