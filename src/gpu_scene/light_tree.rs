@@ -78,6 +78,15 @@ pub fn light_bounds_of(l: &GpuLight, mean_texel: &dyn Fn(u32) -> Vec3) -> Option
     })
 }
 
+/// Mean RGB of a texture's texels (a textured emitter's power counts at its mean).
+pub fn texture_mean(t: &crate::scene::Texture) -> Vec3 {
+    let sum = t
+        .texels
+        .iter()
+        .fold(DVec3::ZERO, |a, v| a + v.truncate().as_dvec3());
+    (sum / t.texels.len().max(1) as f64).as_vec3()
+}
+
 /// The cone containing both (CK18 Alg. 1; pbrt `Union(DirectionCone, DirectionCone)`).
 fn cone_union(a: (DVec3, f64), b: (DVec3, f64)) -> (DVec3, f64) {
     let theta_d = a.0.angle_between(b.0);
@@ -258,7 +267,7 @@ impl Builder {
         let diag = bounds.hi - bounds.lo;
         let mut best = (f64::INFINITY, 0usize, 0usize);
         for axis in 0..3 {
-            if !(ext[axis] > 0.0) {
+            if ext[axis].is_nan() || ext[axis] <= 0.0 {
                 continue;
             }
             let bucket = |b: &Bounds| {
@@ -376,7 +385,7 @@ impl LightTree {
             let second = node.link as usize;
             let c0 = importance(&self.nodes[i + 1], p, n);
             let c1 = importance(&self.nodes[second], p, n);
-            if !(c0 + c1 > 0.0) {
+            if (c0 + c1).is_nan() || c0 + c1 <= 0.0 {
                 return 0.0;
             }
             let right = trail & 1 != 0;
@@ -399,7 +408,7 @@ impl LightTree {
             let second = node.link as usize;
             let c0 = importance(&self.nodes[i + 1], p, n);
             let c1 = importance(&self.nodes[second], p, n);
-            if !(c0 + c1 > 0.0) {
+            if (c0 + c1).is_nan() || c0 + c1 <= 0.0 {
                 none += q;
                 continue;
             }

@@ -54,15 +54,6 @@ pub struct GpuScene {
     _buffers: Vec<Buffer>,
 }
 
-/// Mean RGB of a texture's texels (a textured emitter's power counts at its mean).
-fn texture_mean(t: &crate::scene::Texture) -> Vec3 {
-    let sum = t
-        .texels
-        .iter()
-        .fold(glam::DVec3::ZERO, |a, v| a + v.truncate().as_dvec3());
-    (sum / t.texels.len().max(1) as f64).as_vec3()
-}
-
 fn v4(v: DVec3, w: f64) -> [f32; 4] {
     [v.x as f32, v.y as f32, v.z as f32, w as f32]
 }
@@ -509,7 +500,7 @@ impl GpuScene {
         let light_node_buffer = upload(ctx, "light BVH nodes", &light_bvh.nodes, storage)?;
         let light_ref_buffer = upload(ctx, "light BVH references", &light_bvh.refs, storage)?;
         // The light tree that light samples descend when there are too many lights to loop over.
-        let mean_texel = |t: u32| texture_mean(&scene.textures[t as usize]);
+        let mean_texel = |t: u32| light_tree::texture_mean(&scene.textures[t as usize]);
         let tree = if lights.len() > DIRECT_LOOP_LIGHTS as usize {
             features |= FEATURE_MANY_LIGHTS;
             light_tree::build(&lights, &mean_texel)?
