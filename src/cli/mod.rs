@@ -136,7 +136,7 @@ pub struct IntegratorArgs {
     pub diffuse_mis: bool,
     /// How light samples pick lights in scenes of more than 32 lights: tree (the light tree), scan
     /// (a linear scan over every light, as before the tree) or loop (every light at every point).
-    #[arg(long, default_value = "tree")]
+    #[arg(long, value_name = "KIND", default_value = "tree")]
     pub light_selection: crate::render::LightSelection,
 }
 
