@@ -371,20 +371,22 @@ fn anisotropy_follows_mesh_tangents() {
     );
 }
 
-/// Above 8 lights the integrator picks lights by importance and BRDF samples find lights through
-/// the light BVH: MIS must still agree with light sampling alone. 12 sphere lights and a small
-/// emissive mesh (two triangle lights) over a glossy floor.
+/// Above DIRECT_LOOP_LIGHTS lights the integrator picks lights by descending the light tree and
+/// BRDF samples find lights through the light BVH: MIS must still agree with light sampling alone.
+/// 40 sphere lights and a small emissive mesh (two triangle lights, in the same tree) over a
+/// glossy floor.
 #[test]
 fn many_lights_through_the_light_bvh_agree_with_light_sampling() {
     let mut lights = Vec::new();
-    for i in 0..12 {
-        let (x, z) = (f64::from(i % 4) - 1.5, f64::from(i / 4) - 1.0);
+    for i in 0..40 {
+        let (x, z) = (0.6 * f64::from(i % 8) - 2.1, 0.6 * f64::from(i / 8) - 1.2);
         lights.push(format!(
-            r#""l{i}": {{"sphere": {{"center": [{x}, 1.2, {z}]"radius": 0.2}}, "intensity": {}, "color": [1, {}, 0.8]}}"#,
+            r#""l{i}": {{"sphere": {{"center": [{x}, 1.2, {z}]"radius": 0.1}}, "intensity": {}, "color": [1, {}, 0.8]}}"#,
             2.0 + f64::from(i % 3),
             0.5 + 0.04 * f64::from(i)
         ).replace("]\"radius", "], \"radius"));
     }
+    assert!(lights.len() + 2 > illum::layout::DIRECT_LOOP_LIGHTS as usize);
     let json = format!(
         r#"{{"camera": {{"position": [0, 2.5, 3.5], "look_at": [0, 0, 0], "fov_y": 45, "resolution": [20, 16]}},
             "materials": {{"floor": {{"diffuse": [0.4, 0.4, 0.4], "specular": [{{"model": "ggx", "roughness": 0.35}}]}},

@@ -6,9 +6,11 @@
 // Conventions:
 // * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
 //   `share` its solid angle over the hemisphere's 2 pi (1 for the dome), N_L in [1, N_max]. Above
-//   DIRECT_LOOP_LIGHTS lights, N_max samples are spread over the lights instead, each picking a light
-//   with probability proportional to an estimate of its contribution (power x solid angle x
-//   cosine); light l then has the expected count n_l = N_max P(l) in every MIS weight.
+//   DIRECT_LOOP_LIGHTS lights (FEATURE_MANY_LIGHTS), the infinite lights are still looped over that
+//   way and N_max samples are spread over the finite lights, each picking a light by descending the
+//   light tree (light_tree.glsl): light l then has the expected count n_l = N_max P(l | p, n) in
+//   every MIS weight, P replayed from l's trail for BRDF samples. LIGHT_SELECT_SCAN keeps the former
+//   pick (a linear CDF scan over all lights, infinite ones included) for comparison.
 // * BRDF samples: N_B per specular lobe, drawn once and shared by all lights (N_B counts every
 //   sample, also those that miss all lights or fall below the horizon). The diffuse lobe takes N_B
 //   cosine samples under TECHNIQUE_BRDF, or under MIS with INTEGRATOR_DIFFUSE_MIS; otherwise light
@@ -33,8 +35,8 @@
 #include "microfacet.glsl"
 #include "light_sampling.glsl"
 #include "mis.glsl"
+#include "light_tree.glsl"
 
-#define DIRECT_LOOP_LIGHTS 8u
 #define DIRECT_MAX_CROSSED 16u
 #define LIGHT_BVH_STACK 32u
 
@@ -224,21 +226,32 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     uint n_b = frame.brdf_samples;
     bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
     GpuDomeSampling dome = dome_sampling();
-    bool many = nlights > DIRECT_LOOP_LIGHTS;
+    uint select = has_feature(FEATURE_MANY_LIGHTS) ? frame.light_select : LIGHT_SELECT_LOOP;
+    bool many = nlights > DIRECT_LOOP_LIGHTS && select != LIGHT_SELECT_LOOP;
+    bool tree = many && select == LIGHT_SELECT_TREE;
     float total_importance = 0.0;
-    if (many) {
+    if (many && !tree) {
         for (uint i = 0u; i < nlights; ++i) total_importance += light_importance(get_light(i), sh.p, sh.n);
     }
     vec3 result = vec3(0.0);
 
     // Light samples.
     if (technique != TECHNIQUE_BRDF) {
-        uint rounds = many ? n_max : nlights;
+        // The tree: first a loop over the infinite lights, then n_max picks from the tree.
+        uint looped = tree ? frame.infinite_count : 0u;
+        uint rounds = many ? looped + n_max : nlights;
         for (uint r = 0u; r < rounds; ++r) {
             uint li = r;
             float n_l;       // expected samples of this light per shading point
             uint count;      // samples drawn now
-            if (many) {
+            bool picked = many && r >= looped;
+            if (tree && r < looped) li = LightRefRef(frame.light_refs).v[frame.infinite_first + r];
+            if (picked && tree) {
+                float pmf = light_tree_walk(frame.light_tree, sh.p, sh.n, true, 0u, rng, li);
+                if (!(pmf > 0.0)) continue;
+                n_l = float(n_max) * pmf;
+                count = 1u;
+            } else if (picked) {
                 // Pick one light by importance (inverse CDF over the lights).
                 float u = rng_next(rng) * total_importance, acc = 0.0;
                 li = nlights - 1u;
@@ -251,7 +264,7 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
             }
             GpuLight l = light_seen_from(sh, li);
             if (!light_reaches(l)) continue;
-            if (!many) {
+            if (!picked) {
                 count = light_count_for(l, sh.p, n_max);
                 n_l = float(count);
             }
@@ -300,9 +313,12 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                     if (!(lh.pdf > 0.0)) continue;
                     float w = 1.0;
                     if (technique == TECHNIQUE_MIS && !delta) {
-                        float n_l = many
-                            ? float(n_max) * light_importance(l, sh.p, sh.n) / total_importance
-                            : float(light_count_for(l, sh.p, n_max));
+                        bool infinite = l.kind == LIGHT_DOME || l.kind == LIGHT_SUN;
+                        float n_l = !many || (tree && infinite)
+                            ? float(light_count_for(l, sh.p, n_max))
+                            : tree
+                            ? float(n_max) * light_tree_pmf(frame.light_tree, frame.light_trails, sh.p, sh.n, ids[q])
+                            : float(n_max) * light_importance(l, sh.p, sh.n) / total_importance;
                         w = mis_power(float(n_b), pdf, n_l, lh.pdf);
                     }
                     vec3 c = weight * light_radiance(l, lh.uv, false) * (w / float(n_b));

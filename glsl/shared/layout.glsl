@@ -37,6 +37,8 @@
 #define FEATURE_SUN 16
 #define FEATURE_TEXTURES 32
 #define FEATURE_TRIANGLE_LIGHTS 64
+// More than DIRECT_LOOP_LIGHTS lights: light samples pick lights (Frame.light_select).
+#define FEATURE_MANY_LIGHTS 128
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8
@@ -119,6 +121,21 @@
 #define RADIOSITY_PROBES 16
 #define RADIOSITY_RECORD_KEYS 2
 
+// Lights that direct lighting loops over at every shading point (each with its own sample count);
+// above it, light samples pick lights (FEATURE_MANY_LIGHTS). Measured: docs/performance.md.
+#define DIRECT_LOOP_LIGHTS 32
+// How light samples pick lights (Frame.light_select): loop over every light, the former linear
+// scan of a CDF over all lights (kept for comparison), or the light tree (TECHNIQUES.md 2.7).
+#define LIGHT_SELECT_LOOP 0
+#define LIGHT_SELECT_SCAN 1
+#define LIGHT_SELECT_TREE 2
+// GpuLightTreeNode.link: a leaf, whose light index is link & ~LIGHT_TREE_LEAF.
+#define LIGHT_TREE_LEAF 0x80000000
+// GpuLightTreeNode.flags: some emitter below emits on both sides (the cone test folds the angle).
+#define LIGHT_TREE_TWO_SIDED 1
+// Levels a light's trail (one bit per level) can hold.
+#define LIGHT_TREE_MAX_DEPTH 32
+
 // Hit kinds reported by the trace interface.
 #define HIT_NONE 0
 #define HIT_TRIANGLE 1
@@ -176,14 +193,20 @@ struct Frame {
     float clamp_luminance;    // firefly clamp: the most luminance of one camera sample's direct
                               // lighting (0: off; biased when on)
     uint nan_every;           // test hook: every n-th sample is NaN (0: off)
-    uint pad;
+    uint light_select;        // LIGHT_SELECT_* (with FEATURE_MANY_LIGHTS)
+    uint light_tree_nodes;    // GpuLightTreeNode count
     uint max_depth;           // path integrator: most path segments (NONE: unbounded)
+    uint64_t light_tree;      // GpuLightTreeNode array over the finite lights (0: none)
+    uint64_t light_trails;    // uint per light: its leaf's path, bit k set = second child at depth k
     uint specular_depth;      // full integrator: most specular bounces of the reflection part
-    uint64_t radiosity_table; // RadiosityEntry array of the radiosity cache (0: no cache)
     uint radiosity_mask;      // entries - 1 (a power of two)
+    uint64_t radiosity_table; // RadiosityEntry array of the radiosity cache (0: no cache)
     uint radiosity_levels;    // cell edges radiosity_cell * 2^l, l < radiosity_levels
     float radiosity_cell;     // finest cell edge (scene units)
-    float diffuse_spread;     // ray-cone spread angle a diffuse bounce adds (radians)
+    float diffuse_spread;     // ray-cone spread angle a diffuse bounce starts (radians)
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 // Per-dispatch constants.
@@ -288,6 +311,22 @@ struct GpuLightNode {
     uint index;
     vec3 hi;
     uint count;
+};
+
+// A node of the light tree (src/gpu_scene/light_tree.rs; TECHNIQUES.md 2.7): light samples
+// descend it choosing children by importance. Depth-first: an inner node's first child is the next
+// node, its second `link`; a leaf (LIGHT_TREE_LEAF in link) holds one light.
+struct GpuLightTreeNode {
+    vec3 lo;         // bounds of the subtree's emitters
+    float power;     // emitted power (luminance), relative to the root's
+    vec3 hi;
+    uint link;
+    vec3 axis;       // orientation cone bounding the emitters' normals: unit axis,
+    float cos_o;     // cos(theta_o), the normals' spread about it
+    float cos_e;     // cos(theta_e), emission beyond the normals (0: Lambertian)
+    uint flags;      // LIGHT_TREE_*
+    uint pad0;
+    uint pad1;
 };
 
 struct GpuTexture {

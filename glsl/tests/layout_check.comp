@@ -27,6 +27,7 @@ layout(scalar, binding = 18) buffer B18 { GpuLightNode light_node_v[]; };
 layout(scalar, binding = 19) buffer B19 { RadiosityEntry radiosity_entry_v[]; };
 layout(scalar, binding = 20) buffer B20 { RadiosityRecord radiosity_record_v[]; };
 layout(scalar, binding = 21) buffer B21 { RadiosityPass radiosity_pass_v[]; };
+layout(scalar, binding = 22) buffer B22 { GpuLightTreeNode light_tree_node_v[]; };
 void main() {
     uint i = gl_GlobalInvocationID.x;
     frame_v[i + 1] = frame_v[i];
@@ -40,6 +41,7 @@ void main() {
     texture_v[i + 1] = texture_v[i];
     film_v[i + 1] = film_v[i];
     light_node_v[i + 1] = light_node_v[i];
+    light_tree_node_v[i + 1] = light_tree_node_v[i];
     dome_sampling_v[i + 1] = dome_sampling_v[i];
     bvh_header_v[i + 1] = bvh_header_v[i];
     bvh_node_v[i + 1] = bvh_node_v[i];

@@ -1,5 +1,7 @@
 //! `illum bench trace`: trace throughput, build time and memory of both trace paths.
 //! `illum bench prepared`: what rendering a prepared scene again saves over a fresh render.
+//! `illum bench lights`: light selection (tree, the former linear scan, a loop over every light)
+//! with N sphere lights (src/cli/bench_lights.rs).
 
 use crate::trace::TraceMode;
 use crate::trace::bench;
@@ -15,6 +17,9 @@ pub enum BenchCommand {
     /// Wall time of a fresh render against a render of the same scene already prepared (uploaded
     /// and built), and the bytes each uploads.
     Prepared(BenchPreparedArgs),
+    /// Camera samples per second and equal-time relMSE of the light selections with N sphere
+    /// lights of equal total power (src/stress/many_lights.rs).
+    Lights(super::bench_lights::BenchLightsArgs),
 }
 
 #[derive(clap::Args)]
@@ -61,6 +66,7 @@ pub fn run(command: &BenchCommand) -> Result<()> {
     match command {
         BenchCommand::Trace(a) => trace(a),
         BenchCommand::Prepared(a) => prepared(a),
+        BenchCommand::Lights(a) => super::bench_lights::run(a),
     }
 }
 

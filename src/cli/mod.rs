@@ -3,6 +3,7 @@
 //! renderer, outputs and reports, which know nothing of the command line.
 
 pub mod bench;
+pub mod bench_lights;
 pub mod compare;
 pub mod devices;
 pub mod merge;
@@ -150,6 +151,10 @@ pub struct IntegratorArgs {
     /// measure the cache's bias and gain. [default: the scene's, else on]
     #[arg(long, value_parser = ["on", "off"])]
     pub radiosity_cache: Option<String>,
+    /// How light samples pick lights in scenes of more than 32 lights: tree (the light tree), scan
+    /// (a linear scan over every light, as before the tree) or loop (every light at every point).
+    #[arg(long, value_name = "KIND", default_value = "tree")]
+    pub light_selection: crate::render::LightSelection,
 }
 
 impl IntegratorArgs {
@@ -178,6 +183,7 @@ impl IntegratorArgs {
             light_samples: self.light_samples,
             brdf_samples: self.brdf_samples,
             diffuse_mis: self.diffuse_mis,
+            light_selection: self.light_selection,
         }
     }
 }

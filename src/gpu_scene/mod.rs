@@ -4,6 +4,7 @@
 //! conversion to f32: a scene 1e5 units from the origin keeps the precision of one at the origin.
 
 pub mod dome;
+pub mod light_tree;
 mod lights;
 
 use crate::error::Result;
@@ -498,6 +499,18 @@ impl GpuScene {
         let light_bvh = lights::build(&lights);
         let light_node_buffer = upload(ctx, "light BVH nodes", &light_bvh.nodes, storage)?;
         let light_ref_buffer = upload(ctx, "light BVH references", &light_bvh.refs, storage)?;
+        // The light tree that light samples descend when there are too many lights to loop over.
+        let mean_texel = |t: u32| light_tree::texture_mean(&scene.textures[t as usize]);
+        let tree = if lights.len() > DIRECT_LOOP_LIGHTS as usize {
+            features |= FEATURE_MANY_LIGHTS;
+            light_tree::build(&lights, &mean_texel)?
+        } else {
+            None
+        };
+        let tree_nodes = tree.as_ref().map_or(&[][..], |t| &t.nodes[..]);
+        let light_tree_buffer = upload(ctx, "light tree", tree_nodes, storage)?;
+        let trails = tree.as_ref().map_or(&[][..], |t| &t.trails[..]);
+        let light_trail_buffer = upload(ctx, "light trails", trails, storage)?;
         // Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
         let mut dome_table = None;
         let mut dome_sampling = None;
@@ -534,6 +547,9 @@ impl GpuScene {
             light_bvh_nodes: light_bvh.nodes.len() as u32,
             infinite_first: light_bvh.infinite_first,
             infinite_count: light_bvh.infinite_count,
+            light_tree: addr(&light_tree_buffer),
+            light_trails: addr(&light_trail_buffer),
+            light_tree_nodes: tree_nodes.len() as u32,
             // The camera (set_camera), the integrator and film settings are set by the renderer.
             ..Default::default()
         };
@@ -565,6 +581,8 @@ impl GpuScene {
                 dome_sampling,
                 light_node_buffer,
                 light_ref_buffer,
+                light_tree_buffer,
+                light_trail_buffer,
             ]
             .into_iter()
             .flatten()

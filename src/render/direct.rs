@@ -3,7 +3,7 @@
 //! Lighting at Pixar" does (TECHNIQUES.md §3).
 
 use super::integrator::{Integrator, IntegratorPasses};
-use super::{IntegratorSettings, PreparedScene, Technique};
+use super::{IntegratorSettings, LightSelection, PreparedScene, Technique};
 use crate::error::Result;
 use crate::layout::*;
 use crate::shaders;
@@ -67,6 +67,12 @@ pub fn configure_direct(it: &IntegratorSettings, frame: &mut Frame) {
         INTEGRATOR_DIFFUSE_MIS
     } else {
         0
+    };
+    // Without finite lights there is no tree: the (infinite) lights are looped over.
+    frame.light_select = match it.light_selection {
+        LightSelection::Tree if frame.light_tree != 0 => LIGHT_SELECT_TREE,
+        LightSelection::Scan => LIGHT_SELECT_SCAN,
+        _ => LIGHT_SELECT_LOOP,
     };
 }
 

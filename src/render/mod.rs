@@ -18,7 +18,9 @@ mod settings;
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
-pub use settings::{IntegratorKind, IntegratorSettings, RenderSettings, Technique};
+pub use settings::{
+    IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique,
+};
 
 use crate::error::{Error, Result};
 use crate::layout::*;

@@ -66,6 +66,29 @@ impl IntegratorKind {
     }
 }
 
+/// How light samples pick lights when a scene has more than DIRECT_LOOP_LIGHTS of them
+/// (glsl/shared/direct.glsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSelection {
+    /// Descend the light tree (TECHNIQUES.md §2.7): O(log n) per sample.
+    #[default]
+    Tree,
+    /// The former linear scan of a CDF over every light: O(n) per shading point (for comparison).
+    Scan,
+    /// Loop over every light at every shading point, each with its own samples (brute force).
+    Loop,
+}
+
+impl LightSelection {
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSelection::Tree => "tree",
+            LightSelection::Scan => "scan",
+            LightSelection::Loop => "loop",
+        }
+    }
+}
+
 impl std::str::FromStr for IntegratorKind {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
@@ -75,6 +98,20 @@ impl std::str::FromStr for IntegratorKind {
             "path" => Ok(IntegratorKind::Path),
             _ => Err(format!(
                 "unknown integrator {s:?} (expected direct, full or path)"
+            )),
+        }
+    }
+}
+
+impl std::str::FromStr for LightSelection {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "tree" => Ok(LightSelection::Tree),
+            "scan" => Ok(LightSelection::Scan),
+            "loop" => Ok(LightSelection::Loop),
+            _ => Err(format!(
+                "unknown light selection {s:?} (expected tree, scan or loop)"
             )),
         }
     }
@@ -100,6 +137,8 @@ pub struct IntegratorSettings {
     pub brdf_samples: u32,
     /// Diffuse also by MIS with cosine-sampled BRDF samples (the course: light samples only).
     pub diffuse_mis: bool,
+    /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
+    pub light_selection: LightSelection,
 }
 
 impl Default for IntegratorSettings {
@@ -113,6 +152,7 @@ impl Default for IntegratorSettings {
             light_samples: 4,
             brdf_samples: 2,
             diffuse_mis: false,
+            light_selection: LightSelection::Tree,
         }
     }
 }

@@ -4,6 +4,7 @@
 //! ([`closed_form`]), otherwise a high-sample render by a different technique.
 
 pub mod closed_form;
+pub mod many_lights;
 
 use crate::error::{Error, Result};
 use crate::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
