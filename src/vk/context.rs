@@ -42,9 +42,9 @@ pub struct ExternalDevice {
     /// must not submit to the same queue from another thread while illum is recording work.
     pub queue: vk::Queue,
     pub queue_family_index: u32,
-    /// Whether the device was created with VK_KHR_acceleration_structure + VK_KHR_ray_query and
-    /// their features enabled (illum then uses hardware ray queries).
-    pub ray_query_enabled: bool,
+    /// What the application enabled when it created the device: at least one of the sets of
+    /// [`super::requirements`] (with ray queries enabled, illum uses them).
+    pub enabled: super::FeatureSet,
 }
 
 /// The handles behind a [`Context`], reachable through `Deref` (e.g. `ctx.device`) so that an
@@ -381,13 +381,13 @@ impl Context {
         }
     }
 
-    /// Wraps an application's own device. Requirements on it: Vulkan 1.2, bufferDeviceAddress,
-    /// scalarBlockLayout and shaderInt64 enabled; for ray queries also VK_KHR_acceleration_structure,
-    /// VK_KHR_ray_query and their features. illum destroys nothing it did not create.
+    /// Wraps an application's own device, after checking it against [`super::requirements`]:
+    /// an error names what the device or `ext.enabled` lacks. illum destroys nothing it did not
+    /// create.
     ///
     /// # Safety
-    /// The handles must be valid, created with the features above, and outlive the Context and
-    /// every object made from it.
+    /// The handles must be valid, the device created with `ext.enabled`, and they must outlive
+    /// the Context and every object made from it.
     pub unsafe fn from_external(ext: ExternalDevice) -> Result<Context> {
         unsafe {
             let pds = ext
@@ -399,13 +399,20 @@ impl Context {
                 .position(|&p| p == ext.physical_device)
                 .unwrap_or(0);
             let mut info = describe(&ext.instance, ext.physical_device, index);
-            if !info.missing.is_empty() {
-                return Err(Error::Unsupported {
-                    device: info.name,
-                    what: format!("it lacks {}", info.missing.join(", ")),
-                });
-            }
-            info.ray_query &= ext.ray_query_enabled;
+            let req = super::requirements(&ext.instance, ext.physical_device)?;
+            let family = ext
+                .instance
+                .get_physical_device_queue_family_properties(ext.physical_device)
+                .get(ext.queue_family_index as usize)
+                .map(|q| q.queue_flags);
+            super::requirements::check_external(
+                &req,
+                &ext.enabled,
+                ext.queue_family_index,
+                family,
+                &info.name,
+            )?;
+            info.ray_query &= ext.enabled.has_ray_query();
             let rq = info.ray_query;
             Self::finish(
                 ext.entry,

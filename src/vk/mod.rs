@@ -5,6 +5,7 @@ mod commands;
 mod context;
 mod memory;
 mod pipeline;
+mod requirements;
 mod timer;
 
 pub use context::{
@@ -13,4 +14,5 @@ pub use context::{
 pub use gpu_allocator::MemoryLocation;
 pub use memory::Buffer;
 pub use pipeline::ComputePipeline;
+pub use requirements::{FeatureSet, Requirements, requirements};
 pub use timer::GpuTimer;
