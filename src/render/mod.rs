@@ -14,6 +14,7 @@ mod prepared;
 mod probe;
 mod settings;
 
+pub use crate::gpu_scene::SceneUpdate;
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;

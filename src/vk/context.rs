@@ -72,6 +72,8 @@ pub struct Inner {
     /// a render re-uploads (a prepared scene's second render uploads only its frame constants).
     pub(crate) uploads: std::sync::atomic::AtomicU64,
     pub(crate) uploaded_bytes: std::sync::atomic::AtomicU64,
+    /// Trace-structure levels built: bottom (per mesh or shape run) and top.
+    pub(crate) builds: [std::sync::atomic::AtomicU64; 2],
     owned: bool,
 }
 
@@ -548,6 +550,7 @@ impl Context {
                 kernel_listener: Mutex::new(None),
                 uploads: Default::default(),
                 uploaded_bytes: Default::default(),
+                builds: Default::default(),
                 owned,
             })))
         }
@@ -583,6 +586,18 @@ impl Context {
         if let Ok(mut l) = self.0.kernel_listener.lock() {
             *l = listener;
         }
+    }
+
+    /// Trace-structure levels built so far on this context: (bottom levels, top levels).
+    pub fn build_counts(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        (self.builds[0].load(Relaxed), self.builds[1].load(Relaxed))
+    }
+
+    pub(crate) fn count_builds(&self, bottom: usize, top: usize) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.builds[0].fetch_add(bottom as u64, Relaxed);
+        self.builds[1].fetch_add(top as u64, Relaxed);
     }
 
     pub(crate) fn notify_kernel(&self, name: &str) {
