@@ -222,8 +222,8 @@ pub(crate) struct Host {
     dome_table: Option<dome::DomeTable>,
 }
 
-/// Encodes `scene` relative to `origin`. Without `geometry`, mesh vertices and texels are left
-/// out (an update does not re-read them).
+/// Encodes `scene` relative to `origin`. Without `geometry`, mesh vertices, positions, indices
+/// and texels are left out (an update compares positions and indices with the scene directly).
 fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Host {
     {
         let mut features = 0;
@@ -231,11 +231,15 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Host {
         // Meshes: one shared vertex and index buffer.
         let mut vertices = Vec::new();
         let mut positions = Vec::new();
+        let (mut first_vertex_next, mut first_index_next) = (0u32, 0u32);
         let mut indices = Vec::new();
         let mut meshes = Vec::new();
         for m in &scene.meshes {
-            let first_vertex = positions.len() as u32;
-            positions.extend_from_slice(&m.positions);
+            let first_vertex = first_vertex_next;
+            first_vertex_next += m.positions.len() as u32;
+            if geometry {
+                positions.extend_from_slice(&m.positions);
+            }
             for (i, p) in m.positions.iter().enumerate().filter(|_| geometry) {
                 let n = m.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
                 let uv = m.uvs.as_ref().map_or(glam::Vec2::ZERO, |u| u[i]);
@@ -251,10 +255,13 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Host {
             meshes.push(MeshRange {
                 first_vertex,
                 vertex_count: m.positions.len() as u32,
-                first_index: indices.len() as u32,
+                first_index: first_index_next,
                 triangle_count: (m.indices.len() / 3) as u32,
             });
-            indices.extend_from_slice(&m.indices);
+            if geometry {
+                indices.extend_from_slice(&m.indices);
+            }
+            first_index_next += m.indices.len() as u32;
         }
         let mut gpu_instances = Vec::new();
         let mut instances = Vec::new();
