@@ -4,9 +4,11 @@
 #[path = "embed/app.rs"]
 mod app;
 mod common;
+#[path = "embed/host.rs"]
+mod host;
 use app::App;
 use ash::vk;
-use illum::render::{RenderSettings, Renderer};
+use illum::render::{Pass, PreparedScene, RenderSettings, Renderer};
 use illum::trace::TraceMode;
 
 const SPP: u32 = 4096;
@@ -225,6 +227,119 @@ fn from_external_names_what_the_device_lacks() {
         .to_string();
     assert!(err.contains("queue_family_index 99"), "{err}");
     // SAFETY: no context holds the device.
+    unsafe { device.destroy_device(None) };
+    app.assert_silent();
+}
+
+/// `record_pass` in the host's frame loop (its render pass, then illum's pass, then its copy of
+/// the image, in one command buffer per frame), under synchronization validation: the image after
+/// each pass is the blocking render's of as many samples, bit for bit, and after a camera move the
+/// moved camera's.
+#[test]
+fn record_pass_in_a_host_frame_equals_the_render_bit_for_bit() {
+    let app = App::new();
+    let (device, ctx) = app.device(&app.requirements().base);
+    let ctx = ctx.expect("the application's device");
+    let scene = common::scene(common::SMALL_SCENE);
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let r = Renderer::new(ctx.clone());
+    let settings = RenderSettings {
+        spp: 8,
+        seed: 7,
+        ..Default::default()
+    };
+    let mut prepared = r.prepare(&scene, TraceMode::Auto).unwrap();
+    let render = |p: &PreparedScene, camera: &illum::scene::Camera, spp: u32| {
+        let s = RenderSettings {
+            spp,
+            ..settings.clone()
+        };
+        r.render_prepared(p, camera, &s, &[7], &mut |_, _| {})
+            .unwrap()
+            .remove(0)
+            .film
+            .beauty
+    };
+    let mut moved = scene.camera.clone();
+    moved.position = glam::DVec3::new(-0.8, 1.5, 2.6);
+    let refs = [
+        render(&prepared, &scene.camera, 1),
+        render(&prepared, &scene.camera, 3),
+        render(&prepared, &scene.camera, 8),
+        render(&prepared, &moved, 8),
+    ];
+    // The prepared scene renders as the scene file does.
+    let file = r.render(&scene, &settings, &mut |_, _| {}).unwrap();
+    assert!(file.film.beauty == refs[2]);
+    // SAFETY: the host's objects are destroyed below, before the device.
+    let host =
+        unsafe { host::HostFrame::new(&app.instance, app.pd, &device, app.queue_family, [w, h]) };
+    let images = {
+        let mut session = r
+            .session(&mut prepared, &scene.camera, &settings, host.target())
+            .unwrap();
+        let pass = |session: &mut illum::render::RenderSession, first, count| {
+            host.frame(|cmd| {
+                // SAFETY: the host's command buffer is recording, outside its render pass; the
+                // frame waits for it before the session goes.
+                unsafe {
+                    session.record_pass(
+                        cmd,
+                        &Pass {
+                            first_sample: first,
+                            sample_count: count,
+                        },
+                    )
+                }
+                .unwrap()
+            })
+        };
+        let mut images = vec![
+            pass(&mut session, 0, 1),
+            pass(&mut session, 1, 2),
+            pass(&mut session, 3, 5),
+        ];
+        session.set_camera(&moved).unwrap();
+        images.push(pass(&mut session, 0, 8));
+        assert_eq!(session.samples(), 8);
+        // A pass that does not follow the last one is refused before anything is recorded.
+        // SAFETY: refused before the command buffer is touched.
+        let e = unsafe {
+            session.record_pass(
+                host.cmd,
+                &Pass {
+                    first_sample: 3,
+                    sample_count: 1,
+                },
+            )
+        }
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("where the previous pass ended (8)"), "{e}");
+        images
+    };
+    for (k, (image, reference)) in images.iter().zip(&refs).enumerate() {
+        assert_eq!(image.len(), reference.len());
+        for (i, (p, q)) in image.iter().zip(reference).enumerate() {
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&p[..3]),
+                bits(q),
+                "image {k}, pixel {i}: {p:?} vs {q:?}"
+            );
+            assert_eq!(p[3], 1.0);
+        }
+    }
+    assert!(
+        refs[0] != refs[2] && refs[2] != refs[3],
+        "the references differ"
+    );
+    host.destroy();
+    drop(prepared);
+    drop(r);
+    drop(file);
+    drop(ctx);
+    // SAFETY: illum's context is gone.
     unsafe { device.destroy_device(None) };
     app.assert_silent();
 }

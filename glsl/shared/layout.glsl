@@ -16,6 +16,7 @@
 #define BINDING_FILM 1
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
+#define BINDING_IMAGE 4   // the host's storage image (glsl/resolve_image.comp)
 
 // Specialization constants.
 #define SPEC_FEATURES 0

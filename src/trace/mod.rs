@@ -69,6 +69,8 @@ impl BuildStats {
 }
 
 /// The trace structure a kernel binds.
+// One per prepared scene, never copied around: the variants' size difference does not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum TraceStructure {
     RayQuery(RayQueryScene),
     Bvh(bvh::BvhScene),
