@@ -22,6 +22,14 @@
 //!   context, and keeps the session (and the prepared scene) alive until every command buffer
 //!   holding a pass has completed. Scene updates ([`RenderSession::update_scene`]) and dropping the
 //!   session must wait for the host's pending passes (a fence or `vkQueueWaitIdle`).
+//!
+//! # What the image holds
+//!
+//! The beauty only (no AOV images yet), RGB the mean of the samples so far, alpha 1. The film's
+//! sums stay on the device in float32, where the blocking render moves each 256-sample block into
+//! exact host sums: up to 256 samples per pixel a pass gives the blocking render's image bit for
+//! bit wherever the device's division is correctly rounded (lavapipe; tests/embed.rs), beyond
+//! that the two differ in rounding.
 
 use super::film::FILM_BLOCK;
 use super::integrator::{self, IntegratorPasses};
