@@ -2,7 +2,8 @@
 # Installs what a fresh Debian 12 (bookworm) machine lacks to build and test illum.
 # Idempotent: safe to run again. Needs root (or sudo).
 #   - bookworm-backports (deb822) for Mesa 25's lavapipe, which has VK_KHR_ray_query
-#   - libvulkan1, vulkan-validationlayers, g++, libshaderc-dev (linked statically by build.rs)
+#   - libvulkan1, vulkan-validationlayers, g++, libshaderc-dev (linked statically by build.rs),
+#     libvulkan-dev (Vulkan headers for the C API test, tests/capi.rs)
 #   - slurm-wlm and munge, for the single-node Slurm that scripts/test-slurm.sh starts (no
 #     daemon is enabled or started here; Debian's packages start none without a slurm.conf)
 #   - python3-venv, and kubernetes-validate (PyPI, pinned) in .venv-k8s/ for scripts/test-k8s.sh
@@ -35,7 +36,7 @@ if [ ! -f "$bp" ] || [ "$(cat "$bp")" != "$want" ]; then
 fi
 
 need_pkgs=()
-for p in libvulkan1 vulkan-validationlayers g++ libshaderc-dev glslang-dev slurm-wlm munge python3-venv; do
+for p in libvulkan1 libvulkan-dev vulkan-validationlayers g++ libshaderc-dev glslang-dev slurm-wlm munge python3-venv; do
   dpkg -s "$p" >/dev/null 2>&1 || need_pkgs+=("$p")
 done
 mesa_ver=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)

@@ -17,7 +17,7 @@ echo "== Slurm: one render in 4 parts on a single-node cluster, a task killed an
 scripts/test-slurm.sh
 
 echo "== Mesa 25 lavapipe, the other trace paths forced"
-ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --test report
+ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --test report --test updates
 ILLUM_TEST_TRACE=bvh cargo test --release --test render --test direct --test report --test cli
 
 echo "== Debian's stock Mesa 22.3.6 lavapipe: no VK_KHR_ray_query, so the compute BVH"

@@ -12,6 +12,7 @@ pub mod scene;
 pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }
+pub mod capi;
 pub mod cli;
 pub mod error;
 pub mod vk;

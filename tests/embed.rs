@@ -1,10 +1,15 @@
 //! Embedding: an application creates its own Vulkan instance and device, hands them to illum,
 //! renders, and still owns (and destroys) them afterwards.
 
+#[path = "embed/app.rs"]
+mod app;
 mod common;
+#[path = "embed/host.rs"]
+mod host;
+use app::App;
 use ash::vk;
-use illum::render::{RenderSettings, Renderer};
-use illum::vk::{Context, ExternalDevice};
+use illum::render::{Pass, PreparedScene, RenderSettings, Renderer};
+use illum::trace::TraceMode;
 
 const SPP: u32 = 4096;
 
@@ -100,81 +105,39 @@ fn check_sphere_under_dome(cam: &illum::scene::Camera, beauty: &[[f32; 3]]) {
     }
 }
 
-#[test]
-fn renders_on_an_application_device_and_leaves_it_alive() {
-    // SAFETY: plain Vulkan setup of the "application"; every object is destroyed at the end.
+const SPHERE_UNDER_DOME: &str = r#"{"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_y": 40, "resolution": [12, 8]},
+    "materials": {"m": {"diffuse": [0.5, 0.5, 0.5]}},
+    "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1}, "material": "m"}},
+    "lights": {"sky": {"dome": {}, "color": [1, 1, 1]}}}"#;
+
+/// Renders the sphere under the dome on `ctx` with `trace`, checks the image, drops the context,
+/// then uses and destroys the application's device: it is still the application's.
+fn render_and_release(ctx: illum::vk::Context, device: ash::Device, trace: TraceMode) {
+    let scene = common::scene(SPHERE_UNDER_DOME);
+    let out = Renderer::new(ctx.clone())
+        .render(
+            &scene,
+            &RenderSettings {
+                spp: SPP,
+                trace,
+                ..Default::default()
+            },
+            &mut |_, _| {},
+        )
+        .expect("render on the embedded device");
+    assert_eq!(
+        out.stats.trace,
+        if trace == TraceMode::RayQuery {
+            "rayquery"
+        } else {
+            "bvh"
+        }
+    );
+    check_sphere_under_dome(&scene.camera, &out.film.beauty);
+    drop(out);
+    drop(ctx);
+    // SAFETY: illum's context is gone; the device is the application's to use and destroy.
     unsafe {
-        let entry = ash::Entry::load().expect("Vulkan loader");
-        let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_2);
-        let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
-        let instance = entry
-            .create_instance(
-                &vk::InstanceCreateInfo::default()
-                    .application_info(&app)
-                    .enabled_layer_names(&layers),
-                None,
-            )
-            .expect("instance");
-        let pd = instance.enumerate_physical_devices().unwrap()[0];
-        let qf = instance
-            .get_physical_device_queue_family_properties(pd)
-            .iter()
-            .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .unwrap() as u32;
-        // The application enables what illum needs, without ray queries: illum must then trace
-        // with its compute BVH even if the device could do ray queries.
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
-            .buffer_device_address(true)
-            .scalar_block_layout(true);
-        let mut f2 = vk::PhysicalDeviceFeatures2::default()
-            .features(vk::PhysicalDeviceFeatures::default().shader_int64(true))
-            .push_next(&mut f12);
-        let prio = [1.0f32];
-        let qi = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(qf)
-            .queue_priorities(&prio)];
-        let device = instance
-            .create_device(
-                pd,
-                &vk::DeviceCreateInfo::default()
-                    .queue_create_infos(&qi)
-                    .push_next(&mut f2),
-                None,
-            )
-            .expect("device");
-        let queue = device.get_device_queue(qf, 0);
-        let ctx = Context::from_external(ExternalDevice {
-            entry: entry.clone(),
-            instance: instance.clone(),
-            physical_device: pd,
-            device: device.clone(),
-            queue,
-            queue_family_index: qf,
-            ray_query_enabled: false,
-        })
-        .expect("wrapping the application's device");
-        assert!(!ctx.ray_query());
-        let scene = common::scene(
-            r#"{"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov_y": 40, "resolution": [12, 8]},
-                "materials": {"m": {"diffuse": [0.5, 0.5, 0.5]}},
-                "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1}, "material": "m"}},
-                "lights": {"sky": {"dome": {}, "color": [1, 1, 1]}}}"#,
-        );
-        let out = Renderer::new(ctx.clone())
-            .render(
-                &scene,
-                &RenderSettings {
-                    spp: SPP,
-                    ..Default::default()
-                },
-                &mut |_, _| {},
-            )
-            .expect("render on the embedded device");
-        assert_eq!(out.stats.trace, "bvh");
-        check_sphere_under_dome(&scene.camera, &out.film.beauty);
-        drop(out);
-        drop(ctx);
-        // The device is still the application's: it can still be used, then destroyed by it.
         device
             .device_wait_idle()
             .expect("device still alive after illum is dropped");
@@ -183,6 +146,200 @@ fn renders_on_an_application_device_and_leaves_it_alive() {
             .expect("still usable");
         device.destroy_fence(fence, None);
         device.destroy_device(None);
-        instance.destroy_instance(None);
     }
+}
+
+#[test]
+fn renders_on_an_application_device_without_ray_queries() {
+    let app = App::new();
+    // The application enables illum's base set only: illum must then trace with its compute BVH
+    // even if the device could do ray queries.
+    let (device, ctx) = app.device(&app.requirements().base);
+    let ctx = ctx.expect("wrapping the application's device");
+    assert!(!ctx.ray_query());
+    render_and_release(ctx, device, TraceMode::Auto);
+    app.assert_silent();
+}
+
+#[test]
+fn renders_on_an_application_device_with_ray_queries() {
+    let app = App::new();
+    let req = app.requirements();
+    let Some(rq) = req.ray_query.clone() else {
+        // Mesa 22's lavapipe: no ray queries, and saying they were enabled is refused.
+        let mut claimed = req.base.clone();
+        claimed.ray_query.ray_query = vk::TRUE;
+        let (device, ctx) = app.device(&req.base);
+        // SAFETY: the device is valid; the context is refused, and the device destroyed after.
+        let err = unsafe { app.wrap(&device, claimed, app.queue_family) }
+            .err()
+            .expect("ray queries the device lacks must be refused")
+            .to_string();
+        assert!(err.contains("does not offer"), "{err}");
+        drop(ctx);
+        // SAFETY: no context holds the device any more.
+        unsafe { device.destroy_device(None) };
+        return;
+    };
+    let (device, ctx) = app.device(&rq);
+    let ctx = ctx.expect("wrapping the application's ray-query device");
+    assert!(ctx.ray_query());
+    render_and_release(ctx, device, TraceMode::RayQuery);
+    app.assert_silent();
+}
+
+#[test]
+fn from_external_names_what_the_device_lacks() {
+    let app = App::new();
+    let req = app.requirements();
+    assert!(req.missing.is_empty(), "{:?}", req.missing);
+    let base = &req.base;
+    assert_eq!(base.vulkan12.buffer_device_address, vk::TRUE);
+    assert_eq!(base.vulkan12.scalar_block_layout, vk::TRUE);
+    assert_eq!(base.features.shader_int64, vk::TRUE);
+    assert!(base.extensions.is_empty() && !base.has_ray_query());
+    if let Some(rq) = &req.ray_query {
+        let names: Vec<_> = rq.extensions.iter().map(|e| e.to_str().unwrap()).collect();
+        assert!(names.contains(&"VK_KHR_ray_query"), "{names:?}");
+        assert!(
+            names.contains(&"VK_KHR_acceleration_structure"),
+            "{names:?}"
+        );
+    }
+    // A device created without scalarBlockLayout: the error names the feature.
+    let mut without = base.clone();
+    without.vulkan12.scalar_block_layout = vk::FALSE;
+    let (device, ctx) = app.device(&without);
+    let err = ctx
+        .err()
+        .expect("a device without scalarBlockLayout")
+        .to_string();
+    assert!(
+        err.contains("VkPhysicalDeviceVulkan12Features::scalarBlockLayout"),
+        "{err}"
+    );
+    assert!(!err.contains("bufferDeviceAddress"), "{err}");
+    // A queue family that does not exist.
+    // SAFETY: the device is valid; the context is refused.
+    let err = unsafe { app.wrap(&device, base.clone(), 99) }
+        .err()
+        .expect("queue family 99")
+        .to_string();
+    assert!(err.contains("queue_family_index 99"), "{err}");
+    // SAFETY: no context holds the device.
+    unsafe { device.destroy_device(None) };
+    app.assert_silent();
+}
+
+/// `record_pass` in the host's frame loop (its render pass, then illum's pass, then its copy of
+/// the image, in one command buffer per frame), under synchronization validation: the image after
+/// each pass is the blocking render's of as many samples, bit for bit, and after a camera move the
+/// moved camera's.
+#[test]
+fn record_pass_in_a_host_frame_equals_the_render_bit_for_bit() {
+    let app = App::new();
+    let (device, ctx) = app.device(&app.requirements().base);
+    let ctx = ctx.expect("the application's device");
+    let scene = common::scene(common::SMALL_SCENE);
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let r = Renderer::new(ctx.clone());
+    let settings = RenderSettings {
+        spp: 8,
+        seed: 7,
+        ..Default::default()
+    };
+    let mut prepared = r.prepare(&scene, TraceMode::Auto).unwrap();
+    let render = |p: &PreparedScene, camera: &illum::scene::Camera, spp: u32| {
+        let s = RenderSettings {
+            spp,
+            ..settings.clone()
+        };
+        r.render_prepared(p, camera, &s, &[7], &mut |_, _| {})
+            .unwrap()
+            .remove(0)
+            .film
+            .beauty
+    };
+    let mut moved = scene.camera.clone();
+    moved.position = glam::DVec3::new(-0.8, 1.5, 2.6);
+    let refs = [
+        render(&prepared, &scene.camera, 1),
+        render(&prepared, &scene.camera, 3),
+        render(&prepared, &scene.camera, 8),
+        render(&prepared, &moved, 8),
+    ];
+    // The prepared scene renders as the scene file does.
+    let file = r.render(&scene, &settings, &mut |_, _| {}).unwrap();
+    assert!(file.film.beauty == refs[2]);
+    // SAFETY: the host's objects are destroyed below, before the device.
+    let host =
+        unsafe { host::HostFrame::new(&app.instance, app.pd, &device, app.queue_family, [w, h]) };
+    let images = {
+        let mut session = r
+            .session(&mut prepared, &scene.camera, &settings, host.target())
+            .unwrap();
+        let pass = |session: &mut illum::render::RenderSession, first, count| {
+            host.frame(|cmd| {
+                // SAFETY: the host's command buffer is recording, outside its render pass; the
+                // frame waits for it before the session goes.
+                unsafe {
+                    session.record_pass(
+                        cmd,
+                        &Pass {
+                            first_sample: first,
+                            sample_count: count,
+                        },
+                    )
+                }
+                .unwrap()
+            })
+        };
+        let mut images = vec![
+            pass(&mut session, 0, 1),
+            pass(&mut session, 1, 2),
+            pass(&mut session, 3, 5),
+        ];
+        session.set_camera(&moved).unwrap();
+        images.push(pass(&mut session, 0, 8));
+        assert_eq!(session.samples(), 8);
+        // A pass that does not follow the last one is refused before anything is recorded.
+        // SAFETY: refused before the command buffer is touched.
+        let e = unsafe {
+            session.record_pass(
+                host.cmd,
+                &Pass {
+                    first_sample: 3,
+                    sample_count: 1,
+                },
+            )
+        }
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("where the previous pass ended (8)"), "{e}");
+        images
+    };
+    for (k, (image, reference)) in images.iter().zip(&refs).enumerate() {
+        assert_eq!(image.len(), reference.len());
+        for (i, (p, q)) in image.iter().zip(reference).enumerate() {
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&p[..3]),
+                bits(q),
+                "image {k}, pixel {i}: {p:?} vs {q:?}"
+            );
+            assert_eq!(p[3], 1.0);
+        }
+    }
+    assert!(
+        refs[0] != refs[2] && refs[2] != refs[3],
+        "the references differ"
+    );
+    host.destroy();
+    drop(prepared);
+    drop(r);
+    drop(file);
+    drop(ctx);
+    // SAFETY: illum's context is gone.
+    unsafe { device.destroy_device(None) };
+    app.assert_silent();
 }

@@ -24,6 +24,7 @@
 #define BINDING_AOVS 4
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
+#define BINDING_IMAGE 5   // the host's storage image (glsl/resolve_image.comp)
 
 // Specialization constants.
 #define SPEC_FEATURES 0

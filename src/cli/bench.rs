@@ -124,6 +124,62 @@ fn prepared(a: &BenchPreparedArgs) -> Result<()> {
         again.1,
         fresh.0 - again.0
     );
+    updates(&ctx, prepared, scene, a.repeat)
+}
+
+/// Best wall time of `PreparedScene::update` for each kind of edit the scene allows, with the
+/// bytes written and the levels built. Edits alternate between two values so that each changes.
+fn updates(
+    ctx: &Context,
+    mut prepared: crate::render::PreparedScene,
+    scene: crate::scene::Scene,
+    repeat: usize,
+) -> Result<()> {
+    type Edit = fn(&mut crate::scene::Scene, bool);
+    let mut edits: Vec<(&str, Edit)> = vec![("camera move", |s, odd| {
+        s.camera.position.x += if odd { 0.01 } else { -0.01 };
+    })];
+    if !scene.materials.is_empty() {
+        edits.push(("material edit", |s, odd| {
+            let d = &mut s.materials[0].diffuse.x;
+            *d += if *d > 0.5 { -0.25 } else { 0.25 };
+            let _ = odd;
+        }));
+    }
+    if scene.lights.iter().any(|l| !l.emits_nothing()) {
+        edits.push(("light edit", |s, odd| {
+            let l = s.lights.iter_mut().find(|l| !l.emits_nothing()).unwrap();
+            l.intensity *= if odd { 1.25 } else { 0.8 };
+        }));
+    }
+    if !scene.instances.is_empty() {
+        edits.push(("instance transform", |s, odd| {
+            let step = glam::DVec3::new(if odd { 0.01 } else { -0.01 }, 0.0, 0.0);
+            for i in &mut s.instances {
+                i.transform = glam::DMat4::from_translation(step) * i.transform;
+            }
+        }));
+    }
+    for (name, edit) in edits {
+        let mut s = scene.clone();
+        let mut best = (f64::INFINITY, 0, (0, 0));
+        for k in 0..repeat.max(1) * 2 {
+            edit(&mut s, k % 2 == 1);
+            let ((_, b0), l0) = (ctx.upload_counts(), ctx.build_counts());
+            let u = prepared.update(ctx, &s)?;
+            let ((_, b1), l1) = (ctx.upload_counts(), ctx.build_counts());
+            if u.seconds < best.0 {
+                best = (u.seconds, b1 - b0, (l1.0 - l0.0, l1.1 - l0.1));
+            }
+        }
+        println!(
+            "update, {name}: {:.3} ms, {} bytes written, {} bottom and {} top levels built",
+            best.0 * 1e3,
+            best.1,
+            best.2.0,
+            best.2.1
+        );
+    }
     Ok(())
 }
 

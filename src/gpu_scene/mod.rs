@@ -6,6 +6,8 @@
 pub mod dome;
 pub mod light_tree;
 mod lights;
+mod update;
+pub use update::SceneUpdate;
 
 use crate::error::Result;
 use crate::layout::*;
@@ -51,7 +53,9 @@ pub struct GpuScene {
     pub vertex_buffer: Option<Buffer>,
     pub index_buffer: Option<Buffer>,
     pub aabb_buffer: Option<Buffer>,
-    _buffers: Vec<Buffer>,
+    /// The tables the kernels reach through the frame constants, with what is needed to tell
+    /// whether an edited scene changes them (see `update.rs`).
+    tables: update::Tables,
 }
 
 fn v4(v: DVec3, w: f64) -> [f32; 4] {
@@ -196,26 +200,50 @@ pub fn set_camera(frame: &mut Frame, cam: &crate::scene::Camera, origin: DVec3) 
     frame.height = cam.height;
 }
 
-impl GpuScene {
-    pub fn new(ctx: &Context, scene: &Scene, ray_query: bool) -> Result<GpuScene> {
-        let origin = scene.camera.position;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let build_input = if ray_query {
-            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
-        } else {
-            vk::BufferUsageFlags::empty()
-        };
+/// The scene encoded for the device, on the host: what `GpuScene::new` uploads, and what
+/// `GpuScene::update` compares with what it uploaded.
+pub(crate) struct Host {
+    features: u32,
+    vertices: Vec<GpuVertex>,
+    positions: Vec<Vec3>,
+    indices: Vec<u32>,
+    meshes: Vec<MeshRange>,
+    gpu_instances: Vec<GpuInstance>,
+    instances: Vec<(u32, [[f32; 4]; 3])>,
+    shapes: Vec<GpuShape>,
+    shape_masks: Vec<u32>,
+    aabbs: Vec<[f32; 6]>,
+    lights: Vec<GpuLight>,
+    materials: Vec<GpuMaterial>,
+    textures: Vec<GpuTexture>,
+    texels: Vec<[f32; 4]>,
+    dark_lights: Vec<String>,
+    dome: u32,
+    light_bvh: lights::LightBvh,
+    /// The light tree that light samples descend when there are too many lights to loop over.
+    light_tree: Option<light_tree::LightTree>,
+    dome_table: Option<dome::DomeTable>,
+}
+
+/// Encodes `scene` relative to `origin`. Without `geometry`, mesh vertices, positions, indices
+/// and texels are left out (an update compares positions and indices with the scene directly).
+fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
+    {
         let mut features = 0;
 
         // Meshes: one shared vertex and index buffer.
         let mut vertices = Vec::new();
         let mut positions = Vec::new();
+        let (mut first_vertex_next, mut first_index_next) = (0u32, 0u32);
         let mut indices = Vec::new();
         let mut meshes = Vec::new();
         for m in &scene.meshes {
-            let first_vertex = vertices.len() as u32;
-            positions.extend_from_slice(&m.positions);
-            for (i, p) in m.positions.iter().enumerate() {
+            let first_vertex = first_vertex_next;
+            first_vertex_next += m.positions.len() as u32;
+            if geometry {
+                positions.extend_from_slice(&m.positions);
+            }
+            for (i, p) in m.positions.iter().enumerate().filter(|_| geometry) {
                 let n = m.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
                 let uv = m.uvs.as_ref().map_or(glam::Vec2::ZERO, |u| u[i]);
                 let t = m.tangents.as_ref().map_or(glam::Vec4::ZERO, |t| t[i]);
@@ -230,10 +258,13 @@ impl GpuScene {
             meshes.push(MeshRange {
                 first_vertex,
                 vertex_count: m.positions.len() as u32,
-                first_index: indices.len() as u32,
+                first_index: first_index_next,
                 triangle_count: (m.indices.len() / 3) as u32,
             });
-            indices.extend_from_slice(&m.indices);
+            if geometry {
+                indices.extend_from_slice(&m.indices);
+            }
+            first_index_next += m.indices.len() as u32;
         }
         let mut gpu_instances = Vec::new();
         let mut instances = Vec::new();
@@ -466,127 +497,110 @@ impl GpuScene {
                 } | wrap(t.wrap[0]) << TEXTURE_WRAP_SHIFT_U
                     | wrap(t.wrap[1]) << TEXTURE_WRAP_SHIFT_V,
             });
-            texels.extend(t.texels.iter().map(|v| v.to_array()));
+            if geometry {
+                texels.extend(t.texels.iter().map(|v| v.to_array()));
+            }
         }
         if !textures.is_empty() {
             features |= FEATURE_TEXTURES;
         }
 
         let aabbs: Vec<[f32; 6]> = shapes.iter().map(shape_aabb).collect();
-        // Features a scene does not use get no buffer at all (their address stays 0).
-        fn upload<T: bytemuck::Pod>(
-            ctx: &Context,
-            name: &str,
-            data: &[T],
-            usage: vk::BufferUsageFlags,
-        ) -> Result<Option<Buffer>> {
-            if data.is_empty() {
-                return Ok(None);
-            }
-            ctx.upload(name, data, usage).map(Some)
-        }
-        let vertex_buffer = upload(ctx, "vertices", &vertices, storage | build_input)?;
-        let index_buffer = upload(ctx, "indices", &indices, storage | build_input)?;
-        let aabb_buffer = upload(ctx, "shape AABBs", &aabbs, storage | build_input)?;
-        let instance_buffer = upload(ctx, "instances", &gpu_instances, storage)?;
-        let material_buffer = upload(ctx, "materials", &materials, storage)?;
-        let shape_buffer = upload(ctx, "shapes", &shapes, storage)?;
-        let light_buffer = upload(ctx, "lights", &lights, storage)?;
-        let texture_buffer = upload(ctx, "textures", &textures, storage)?;
-        let texel_buffer = upload(ctx, "texels", &texels, storage)?;
-
-        // The light BVH that BRDF samples traverse to find the lights they cross.
         let light_bvh = lights::build(&lights);
-        let light_node_buffer = upload(ctx, "light BVH nodes", &light_bvh.nodes, storage)?;
-        let light_ref_buffer = upload(ctx, "light BVH references", &light_bvh.refs, storage)?;
-        // The light tree that light samples descend when there are too many lights to loop over.
         let mean_texel = |t: u32| light_tree::texture_mean(&scene.textures[t as usize]);
-        let tree = if lights.len() > DIRECT_LOOP_LIGHTS as usize {
+        let light_tree = if lights.len() > DIRECT_LOOP_LIGHTS as usize {
             features |= FEATURE_MANY_LIGHTS;
             light_tree::build(&lights, &mean_texel)?
         } else {
             None
         };
-        let tree_nodes = tree.as_ref().map_or(&[][..], |t| &t.nodes[..]);
-        let light_tree_buffer = upload(ctx, "light tree", tree_nodes, storage)?;
-        let trails = tree.as_ref().map_or(&[][..], |t| &t.trails[..]);
-        let light_trail_buffer = upload(ctx, "light trails", trails, storage)?;
         // Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
-        let mut dome_table = None;
-        let mut dome_sampling = None;
-        if dome != NONE
-            && let Some(t) = scene.lights[dome_map.0].texture
-        {
-            let tint = scene.lights[dome_map.0].radiance();
-            let table = dome::build(&scene.textures[t as usize], tint, dome_map.1);
-            let data = ctx.upload("dome CDFs", &table.data(), storage)?;
-            let gpu = table.gpu(data.address);
-            dome_sampling =
-                Some(ctx.upload("dome sampling", std::slice::from_ref(&gpu), storage)?);
-            dome_table = Some(data);
-        }
-        let addr = |b: &Option<Buffer>| b.as_ref().map_or(0, |b| b.address);
-        let mut frame = Frame {
-            light_count: lights.len() as u32,
-            shape_count: shapes.len() as u32,
-            instance_count: gpu_instances.len() as u32,
-            material_count: materials.len() as u32,
-            texture_count: textures.len() as u32,
-            dome_light: dome,
-            instances: addr(&instance_buffer),
-            vertices: addr(&vertex_buffer),
-            indices: addr(&index_buffer),
-            materials: addr(&material_buffer),
-            shapes: addr(&shape_buffer),
-            lights: addr(&light_buffer),
-            textures: addr(&texture_buffer),
-            texels: addr(&texel_buffer),
-            dome_sampling: addr(&dome_sampling),
-            light_nodes: addr(&light_node_buffer),
-            light_refs: addr(&light_ref_buffer),
-            light_bvh_nodes: light_bvh.nodes.len() as u32,
-            infinite_first: light_bvh.infinite_first,
-            infinite_count: light_bvh.infinite_count,
-            light_tree: addr(&light_tree_buffer),
-            light_trails: addr(&light_trail_buffer),
-            light_tree_nodes: tree_nodes.len() as u32,
-            // The camera (set_camera), the integrator and film settings are set by the renderer.
-            ..Default::default()
-        };
-        set_camera(&mut frame, &scene.camera, origin);
-        Ok(GpuScene {
-            frame,
+        let dome_table = (dome != NONE)
+            .then(|| {
+                let l = &scene.lights[dome_map.0];
+                l.texture
+                    .map(|t| dome::build(&scene.textures[t as usize], l.radiance(), dome_map.1))
+            })
+            .flatten();
+        Ok(Host {
             features,
+            vertices,
+            positions,
+            indices,
             meshes,
+            gpu_instances,
             instances,
             shapes,
             shape_masks,
-            shape_boxes: aabbs,
-            origin,
+            aabbs,
+            lights,
+            materials,
+            textures,
+            texels,
             dark_lights,
-            emitters: lights.len() as u32,
-            positions,
-            indices,
+            dome,
+            light_bvh,
+            light_tree,
+            dome_table,
+        })
+    }
+}
+
+impl GpuScene {
+    pub fn new(ctx: &Context, scene: &Scene, ray_query: bool) -> Result<GpuScene> {
+        let origin = scene.camera.position;
+        let h = encode_scene(scene, origin, true)?;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let build_input = if ray_query {
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+        } else {
+            vk::BufferUsageFlags::empty()
+        };
+        let upload = |name: &str, data: &[u8], usage| -> Result<Option<Buffer>> {
+            if data.is_empty() {
+                return Ok(None);
+            }
+            ctx.upload(name, data, usage).map(Some)
+        };
+        let vertex_buffer = upload(
+            "vertices",
+            bytemuck::cast_slice(&h.vertices),
+            storage | build_input,
+        )?;
+        let index_buffer = upload(
+            "indices",
+            bytemuck::cast_slice(&h.indices),
+            storage | build_input,
+        )?;
+        let aabb_buffer = upload(
+            "shape AABBs",
+            bytemuck::cast_slice(&h.aabbs),
+            storage | build_input,
+        )?;
+        let tables = update::Tables::upload(ctx, &h)?;
+        let mut frame = Frame::default();
+        tables.write_frame(&mut frame, &h);
+        let addr = |b: &Option<Buffer>| b.as_ref().map_or(0, |b| b.address);
+        frame.vertices = addr(&vertex_buffer);
+        frame.indices = addr(&index_buffer);
+        set_camera(&mut frame, &scene.camera, origin);
+        Ok(GpuScene {
+            frame,
+            features: h.features,
+            meshes: h.meshes,
+            instances: h.instances,
+            shapes: h.shapes,
+            shape_masks: h.shape_masks,
+            shape_boxes: h.aabbs,
+            origin,
+            dark_lights: h.dark_lights,
+            emitters: h.lights.len() as u32,
+            positions: h.positions,
+            indices: h.indices,
             vertex_buffer,
             index_buffer,
             aabb_buffer,
-            _buffers: [
-                instance_buffer,
-                material_buffer,
-                shape_buffer,
-                light_buffer,
-                texture_buffer,
-                texel_buffer,
-                dome_table,
-                dome_sampling,
-                light_node_buffer,
-                light_ref_buffer,
-                light_tree_buffer,
-                light_trail_buffer,
-            ]
-            .into_iter()
-            .flatten()
-            .collect(),
+            tables,
         })
     }
 }

@@ -13,14 +13,15 @@ pub mod integrator;
 pub mod job;
 mod prepared;
 mod probe;
+mod session;
 mod settings;
 
+pub use crate::gpu_scene::SceneUpdate;
 use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
-pub use settings::{
-    IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique,
-};
+pub use session::{ImageState, Pass, RenderSession, TargetImage};
+pub use settings::{IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique};
 
 use crate::error::{Error, Result};
 use crate::layout::*;

@@ -4,7 +4,7 @@
 use super::Renderer;
 use super::integrator::IntegratorPasses;
 use crate::error::Result;
-use crate::gpu_scene::GpuScene;
+use crate::gpu_scene::{GpuScene, SceneUpdate};
 use crate::scene::{Camera, Scene};
 use crate::trace::{BuildStats, TraceMode, TraceStructure};
 use std::cell::RefCell;
@@ -37,6 +37,21 @@ impl PreparedScene {
 
     pub(super) fn keep_kernels(&self, name: &'static str, kernels: Box<dyn IntegratorPasses>) {
         self.kernels.borrow_mut().push((name, kernels));
+    }
+
+    /// Brings the prepared scene to `scene`, an edit of the one it was prepared from, without
+    /// preparing it again: edited materials and lights rewrite their tables only, moved instances
+    /// also rebuild the trace structure's top level (never a bottom level), and a moved camera
+    /// changes nothing here (each render writes its frame constants). Geometry, the set of lights
+    /// that emit and textures cannot change this way: the error names what changed.
+    pub fn update(&mut self, ctx: &crate::vk::Context, scene: &Scene) -> Result<SceneUpdate> {
+        let t0 = Instant::now();
+        let mut u = self.gpu.update(ctx, scene)?;
+        if u.instances_moved {
+            self.trace.update_top(ctx, &self.gpu)?;
+        }
+        u.seconds = t0.elapsed().as_secs_f64();
+        Ok(u)
     }
 
     /// The trace path the structure was built for ("rayquery" or "bvh").

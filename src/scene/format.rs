@@ -106,6 +106,19 @@ pub struct TextureDef {
     /// Texel indices outside the image, along both axes (Mitsuba 3's `wrap_mode`).
     #[serde(default)]
     pub wrap: WrapDef,
+    /// Pixels handed over by an application ([`super::SceneBuilder::texture_pixels`]) instead
+    /// of a file; not part of the file format.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub pixels: Option<HostPixels>,
+}
+
+/// An image in host memory: `rgba` holds width × height RGBA texels, row-major, top row first.
+#[derive(Debug, Clone, Default)]
+pub struct HostPixels {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<f32>,
 }
 
 /// Texture filter.
@@ -209,7 +222,7 @@ pub fn default_fresnel() -> FresnelDef {
 }
 
 /// A shape: exactly one of `sphere`, `rect`, `disk`, `mesh`, `gltf`.
-#[derive(Debug, serde::Deserialize)]
+#[derive(Debug, Default, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeDef {
     pub sphere: Option<SphereDef>,
@@ -258,7 +271,7 @@ pub struct DiskDef {
 }
 
 /// An inline triangle mesh in object space.
-#[derive(Debug, serde::Deserialize, JsonSchema)]
+#[derive(Debug, Default, serde::Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MeshDef {
     /// Vertex positions.
@@ -283,7 +296,7 @@ pub struct GltfDef {
 }
 
 /// Object-to-world transform: `translate`/`rotate`/`scale` (M = T·Rz·Ry·Rx·S) or `matrix`.
-#[derive(Debug, serde::Deserialize, JsonSchema)]
+#[derive(Debug, Default, Clone, serde::Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TransformDef {
     /// Translation.
@@ -330,7 +343,7 @@ pub fn default_visible() -> bool {
 }
 
 /// Infinite environment light.
-#[derive(Debug, serde::Deserialize, JsonSchema)]
+#[derive(Debug, Default, serde::Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DomeDef {
     /// Rotation of the map about +Y in degrees.

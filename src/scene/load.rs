@@ -256,6 +256,10 @@ impl Builder<'_> {
     }
 
     fn texture(&self, name: &str, def: &TextureDef) -> Result<Texture> {
+        if let Some(p) = &def.pixels {
+            return super::builder::host_texture(self.ctx, name, def.srgb, p)
+                .map(|t| self.sampled(t, def));
+        }
         let field = format!("textures.{name}.file");
         let kind = ImageKind::from_path(&def.file).ok_or_else(|| {
             self.ctx.err(
@@ -268,8 +272,13 @@ impl Builder<'_> {
         let bytes = read_capped(&path, MAX_ASSET_FILE_BYTES)
             .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
         let srgb = def.srgb.unwrap_or(kind.srgb_by_default());
-        let mut t = texture::decode(name, &bytes, kind, srgb)
+        let t = texture::decode(name, &bytes, kind, srgb)
             .map_err(|m| SceneError::decode(self.ctx.file, &field, &def.file, m))?;
+        Ok(self.sampled(t, def))
+    }
+
+    /// The filter and wrap modes of `def`.
+    fn sampled(&self, mut t: Texture, def: &TextureDef) -> Texture {
         t.filter = match def.filter {
             FilterDef::Bilinear => TextureFilter::Bilinear,
             FilterDef::Nearest => TextureFilter::Nearest,
@@ -279,7 +288,7 @@ impl Builder<'_> {
             WrapDef::Clamp => TextureWrap::Clamp,
             WrapDef::Mirror => TextureWrap::Mirror,
         }; 2];
-        Ok(t)
+        t
     }
 
     fn material(&self, name: &str, def: &MaterialDef) -> Result<Material> {

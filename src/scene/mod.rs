@@ -1,11 +1,12 @@
 //! Scene description: the JSON file format, its validation, glTF loading, and the validated
 //! host-side scene the renderer consumes. See docs/scene-format.md.
 
+mod builder;
 mod camera;
 mod check;
 pub mod dome_map;
 mod error;
-mod format;
+pub mod format;
 mod gltf;
 mod gltf_material;
 mod gltf_mesh;
@@ -15,6 +16,7 @@ mod texture;
 mod transform;
 mod types;
 
+pub use builder::SceneBuilder;
 pub(crate) use error::io_message;
 pub use error::{MAX_ASSET_FILE_BYTES, MAX_SCENE_FILE_BYTES, SceneError};
 pub use types::*;

@@ -69,6 +69,8 @@ impl BuildStats {
 }
 
 /// The trace structure a kernel binds.
+// One per prepared scene, never copied around: the variants' size difference does not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum TraceStructure {
     RayQuery(RayQueryScene),
     Bvh(bvh::BvhScene),
@@ -130,12 +132,6 @@ impl TraceStructure {
     /// Builds the ray-query acceleration structures over an uploaded scene.
     pub fn build_ray_query(ctx: &Context, scene: &GpuScene) -> Result<TraceStructure> {
         let mut inputs = Vec::new();
-        let mut instances = Vec::new();
-        let identity = [
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 0.0],
-        ];
         if let (Some(vb), Some(ib)) = (&scene.vertex_buffer, &scene.index_buffer) {
             for m in &scene.meshes {
                 inputs.push(BlasInput::Triangles(TriangleGeometry {
@@ -147,39 +143,80 @@ impl TraceStructure {
                     triangle_count: m.triangle_count,
                 }));
             }
-            for (i, (mesh, rows)) in scene.instances.iter().enumerate() {
-                instances.push(TlasInstance {
-                    blas: *mesh as usize,
-                    transform: *rows,
-                    custom_index: i as u32,
-                    mask: MASK_GEOMETRY as u8,
-                });
-            }
         }
         if let Some(ab) = &scene.aabb_buffer {
-            // One AABB bottom level per run of shapes that share a ray mask.
-            let masks = &scene.shape_masks;
-            let mut first = 0;
-            while first < masks.len() {
-                let mask = masks[first];
-                let count = masks[first..].iter().take_while(|&&m| m == mask).count();
-                instances.push(TlasInstance {
-                    blas: inputs.len(),
-                    transform: identity,
-                    custom_index: first as u32,
-                    mask: mask as u8,
-                });
+            for (first, count, _) in shape_runs(scene) {
                 inputs.push(BlasInput::Aabbs(AabbGeometry {
                     aabb_address: ab.address + first as u64 * 24,
                     count: count as u32,
                 }));
-                first += count;
             }
         }
         Ok(TraceStructure::RayQuery(rayquery::build(
-            ctx, &inputs, &instances,
+            ctx,
+            &inputs,
+            &top_instances(scene),
         )?))
     }
+
+    /// Follows moved instances of `scene` (the one the structure was built over, updated by
+    /// `GpuScene::update`): the top level is built again, the bottom levels are kept.
+    pub fn update_top(&mut self, ctx: &Context, scene: &GpuScene) -> Result<f64> {
+        match self {
+            TraceStructure::RayQuery(rq) => rq.update_top(ctx, &top_instances(scene)),
+            TraceStructure::Bvh(b) => b.update_top(ctx, scene),
+        }
+    }
+}
+
+/// Runs of consecutive shapes that share a ray mask: (first, count, mask). Each is one AABB
+/// bottom level.
+fn shape_runs(scene: &GpuScene) -> Vec<(usize, usize, u32)> {
+    let masks = &scene.shape_masks;
+    let mut runs = Vec::new();
+    let mut first = 0;
+    while first < masks.len() {
+        let mask = masks[first];
+        let count = masks[first..].iter().take_while(|&&m| m == mask).count();
+        runs.push((first, count, mask));
+        first += count;
+    }
+    runs
+}
+
+/// The ray-query top level: mesh instances (bottom level = mesh index), then one identity
+/// instance per run of shapes (bottom levels after the meshes').
+fn top_instances(scene: &GpuScene) -> Vec<TlasInstance> {
+    let identity = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    let mut instances = Vec::new();
+    let meshes = if scene.vertex_buffer.is_some() && scene.index_buffer.is_some() {
+        for (i, (mesh, rows)) in scene.instances.iter().enumerate() {
+            instances.push(TlasInstance {
+                blas: *mesh as usize,
+                transform: *rows,
+                custom_index: i as u32,
+                mask: MASK_GEOMETRY as u8,
+            });
+        }
+        scene.meshes.len()
+    } else {
+        0
+    };
+    if scene.aabb_buffer.is_some() {
+        for (k, (first, _, mask)) in shape_runs(scene).into_iter().enumerate() {
+            instances.push(TlasInstance {
+                blas: meshes + k,
+                transform: identity,
+                custom_index: first as u32,
+                mask: mask as u8,
+            });
+        }
+    }
+    instances
 }
 
 impl TraceMode {

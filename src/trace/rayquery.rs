@@ -58,6 +58,7 @@ pub struct RayQueryScene {
     _blases: Vec<AccelerationStructure>,
     pub tlas: AccelerationStructure,
     _instances: Buffer,
+    instance_count: usize,
     pub stats: BuildStats,
 }
 
@@ -301,7 +302,25 @@ pub fn build(
 
     // Top level.
     let t2 = Instant::now();
-    let raw: Vec<vk::AccelerationStructureInstanceKHR> = instances
+    let (tlas, instance_buffer, tlas_bytes) = build_top(ctx, &compacted, instances, None)?
+        .ok_or_else(|| Error::Invalid("no top level was built".into()))?;
+    stats.tlas_bytes = tlas_bytes;
+    stats.tlas_seconds = t2.elapsed().as_secs_f64();
+    ctx.count_builds(compacted.len(), 1);
+    Ok(RayQueryScene {
+        _blases: compacted,
+        tlas,
+        _instances: instance_buffer,
+        instance_count: instances.len(),
+        stats,
+    })
+}
+
+fn raw_instances(
+    blases: &[AccelerationStructure],
+    instances: &[TlasInstance],
+) -> Vec<vk::AccelerationStructureInstanceKHR> {
+    instances
         .iter()
         .map(|i| {
             let m = &i.transform;
@@ -318,26 +337,49 @@ pub fn build(
                     vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
                 ),
                 acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
-                    device_handle: compacted[i.blas].address,
+                    device_handle: blases[i.blas].address,
                 },
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Builds the top level over `blases`: into a new structure and instance buffer, or, given the
+/// ones of an earlier build with as many instances, into those (the structure's handle stays,
+/// so the kernels bound to it need no new descriptor).
+fn build_top(
+    ctx: &Context,
+    blases: &[AccelerationStructure],
+    instances: &[TlasInstance],
+    into: Option<(&AccelerationStructure, &Buffer)>,
+) -> Result<Option<(AccelerationStructure, Buffer, u64)>> {
+    let a = accel(ctx)?;
+    let raw = raw_instances(blases, instances);
     // SAFETY: AccelerationStructureInstanceKHR is plain data of 64 bytes.
     let bytes: &[u8] = unsafe {
         std::slice::from_raw_parts(raw.as_ptr() as *const u8, std::mem::size_of_val(&raw[..]))
     };
-    let instance_buffer = ctx.upload(
-        "TLAS instances",
-        bytes,
-        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
-    )?;
+    let fresh = match into {
+        Some((_, buffer)) => {
+            ctx.write(buffer, 0, bytes)?;
+            None
+        }
+        None => Some(ctx.upload(
+            "TLAS instances",
+            bytes,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
+        )?),
+    };
+    let instance_address = fresh
+        .as_ref()
+        .or(into.map(|i| i.1))
+        .map_or(0, |b| b.address);
     let tgeom = [vk::AccelerationStructureGeometryKHR::default()
         .geometry_type(vk::GeometryTypeKHR::INSTANCES)
         .geometry(vk::AccelerationStructureGeometryDataKHR {
             instances: vk::AccelerationStructureGeometryInstancesDataKHR::default().data(
                 vk::DeviceOrHostAddressConstKHR {
-                    device_address: instance_buffer.address,
+                    device_address: instance_address,
                 },
             ),
         })];
@@ -357,30 +399,56 @@ pub fn build(
             &mut sizes,
         )
     };
-    let tlas = create_as(
-        ctx,
-        vk::AccelerationStructureTypeKHR::TOP_LEVEL,
-        sizes.acceleration_structure_size,
-        "TLAS",
-    )?;
-    stats.tlas_bytes = sizes.acceleration_structure_size;
+    let tlas = match into {
+        Some(_) => None,
+        None => Some(create_as(
+            ctx,
+            vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+            sizes.acceleration_structure_size,
+            "TLAS",
+        )?),
+    };
+    let dst = tlas
+        .as_ref()
+        .or(into.map(|i| i.0))
+        .map_or(vk::AccelerationStructureKHR::null(), |t| t.handle);
     let (sb, saddr) = scratch(ctx, sizes.build_scratch_size)?;
-    let info =
-        info.dst_acceleration_structure(tlas.handle)
-            .scratch_data(vk::DeviceOrHostAddressKHR {
-                device_address: saddr,
-            });
+    let info = info
+        .dst_acceleration_structure(dst)
+        .scratch_data(vk::DeviceOrHostAddressKHR {
+            device_address: saddr,
+        });
     let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
     ctx.one_shot(|cmd| {
-        // SAFETY: instance buffer, scratch and TLAS are alive until the wait in one_shot.
+        // SAFETY: instance buffer, scratch and TLAS are alive until the wait in one_shot; every
+        // earlier submission tracing the structure has completed (one_shot waits).
         unsafe { a.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
     })?;
     drop(sb);
-    stats.tlas_seconds = t2.elapsed().as_secs_f64();
-    Ok(RayQueryScene {
-        _blases: compacted,
-        tlas,
-        _instances: instance_buffer,
-        stats,
-    })
+    Ok(tlas
+        .zip(fresh)
+        .map(|(t, b)| (t, b, sizes.acceleration_structure_size)))
+}
+
+impl RayQueryScene {
+    /// Rebuilds the top level over the same bottom levels with moved instances (as many as
+    /// before, in the same order), into the same structure.
+    pub fn update_top(&mut self, ctx: &Context, instances: &[TlasInstance]) -> Result<f64> {
+        let t = Instant::now();
+        if instances.len() != self.instance_count {
+            return Err(Error::Invalid(format!(
+                "the top level holds {} instances, the update gives {}",
+                self.instance_count,
+                instances.len()
+            )));
+        }
+        build_top(
+            ctx,
+            &self._blases,
+            instances,
+            Some((&self.tlas, &self._instances)),
+        )?;
+        ctx.count_builds(0, 1);
+        Ok(t.elapsed().as_secs_f64())
+    }
 }

@@ -189,6 +189,51 @@ impl Context {
         Ok(dst)
     }
 
+    /// Overwrites `dst` (made by [`Context::upload`]) from byte `offset` with `data`, through a
+    /// staging buffer; counted as an upload.
+    pub fn write<T: bytemuck::Pod>(&self, dst: &Buffer, offset: u64, data: &[T]) -> Result<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if offset + bytes.len() as u64 > dst.size {
+            return Err(Error::Invalid(format!(
+                "{} bytes do not fit a buffer of {}",
+                bytes.len(),
+                dst.size
+            )));
+        }
+        self.uploads
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.uploaded_bytes
+            .fetch_add(bytes.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        let mut staging = self.create_buffer(
+            "write (staging)",
+            bytes.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging
+            .mapped()
+            .ok_or_else(|| Error::Invalid("staging buffer is not host visible".into()))?
+            [..bytes.len()]
+            .copy_from_slice(bytes);
+        self.one_shot(|cmd| {
+            // SAFETY: both buffers are alive until the submission completes; every earlier
+            // submission reading `dst` has completed (one_shot waits).
+            unsafe {
+                self.device.cmd_copy_buffer(
+                    cmd,
+                    staging.buffer,
+                    dst.buffer,
+                    &[vk::BufferCopy::default()
+                        .dst_offset(offset)
+                        .size(bytes.len() as u64)],
+                )
+            }
+        })
+    }
+
     /// Buffers uploaded so far through [`Context::upload`], and their bytes.
     pub fn upload_counts(&self) -> (u64, u64) {
         use std::sync::atomic::Ordering::Relaxed;

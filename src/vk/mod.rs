@@ -3,14 +3,16 @@
 
 mod commands;
 mod context;
+mod devices;
 mod memory;
 mod pipeline;
+mod requirements;
 mod timer;
 
-pub use context::{
-    Context, ContextOptions, DeviceInfo, ExternalDevice, KernelListener, list_devices,
-};
+pub use context::{Context, ContextOptions, ExternalDevice, KernelListener};
+pub use devices::{DeviceInfo, list_devices};
 pub use gpu_allocator::MemoryLocation;
 pub use memory::Buffer;
 pub use pipeline::ComputePipeline;
+pub use requirements::{FeatureSet, Requirements, requirements};
 pub use timer::GpuTimer;

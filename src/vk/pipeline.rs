@@ -153,6 +153,20 @@ impl ComputePipeline {
         unsafe { self.ctx.device.update_descriptor_sets(&[w], &[]) };
     }
 
+    /// Binds a storage image view (in layout GENERAL when the dispatch runs).
+    pub fn bind_storage_image(&self, binding: u32, view: vk::ImageView) {
+        let info = [vk::DescriptorImageInfo::default()
+            .image_view(view)
+            .image_layout(vk::ImageLayout::GENERAL)];
+        let w = vk::WriteDescriptorSet::default()
+            .dst_set(self.set)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .image_info(&info);
+        // SAFETY: as in bind_buffer.
+        unsafe { self.ctx.device.update_descriptor_sets(&[w], &[]) };
+    }
+
     /// Records push constants, the bound set and a dispatch of `groups` workgroups.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, push: &[u8], groups: [u32; 3]) {
         let dev = &self.ctx.device;

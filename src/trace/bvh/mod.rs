@@ -57,9 +57,15 @@ use std::time::Instant;
 pub struct BvhScene {
     /// Uniform buffer holding the `BvhHeader` (bound at `BINDING_BVH`).
     pub header: Buffer,
-    _nodes: Buffer,
+    header_data: BvhHeader,
+    nodes: Buffer,
     _triangles: Buffer,
-    _instances: Buffer,
+    instances: Buffer,
+    /// The bottom levels, for rebuilding the top level alone.
+    bottoms: Vec<Bottom>,
+    blas_nodes: usize,
+    /// Nodes reserved for the top level after the bottom levels' `blas_nodes`.
+    top_capacity: usize,
     pub stats: BuildStats,
 }
 
@@ -228,19 +234,99 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
     }
     let blas_nodes = nodes.len();
 
-    // Top level: instances of non-empty meshes with an invertible transform, then the shapes.
+    let bottoms: Vec<Bottom> = meshes
+        .iter()
+        .zip(&roots)
+        .map(|(m, &root)| Bottom {
+            root,
+            need: m.need,
+            bounds: m.bounds,
+            empty: m.root == NONE,
+        })
+        .collect();
+    let (top_nodes, instances, root, need) = top_level(scene, &bottoms, nodes.len() as u32)?;
+    // Room for the largest top level the instances can have (one 4-wide node per binary inner
+    // node at most, and a root), so that moving them rewrites it in place.
+    let items = scene.instances.len() + scene.shapes.len();
+    let top_capacity = (items + 1).max(top_nodes.len());
+    nodes.extend(top_nodes);
+    nodes.resize(blas_nodes + top_capacity, BvhNode::default());
+    let mut instances_padded = instances.clone();
+    instances_padded.resize(items.max(1), BvhInstance::default());
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let node_buffer = ctx.upload("BVH nodes", &nodes, storage)?;
+    let triangle_buffer = ctx.upload("BVH triangles", &triangles, storage)?;
+    let instance_buffer = ctx.upload("BVH instances", &instances_padded, storage)?;
+    let header = BvhHeader {
+        nodes: node_buffer.address,
+        triangles: triangle_buffer.address,
+        instances: instance_buffer.address,
+        root,
+        node_count: (blas_nodes + top_capacity) as u32,
+    };
+    let header_buffer = ctx.upload(
+        "BVH header",
+        std::slice::from_ref(&header),
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+    )?;
+    let node_size = std::mem::size_of::<BvhNode>() as u64;
+    let blas_bytes = blas_nodes as u64 * node_size + std::mem::size_of_val(&triangles[..]) as u64;
+    let stats = BuildStats {
+        blas_count: meshes.len(),
+        triangles: triangles.len() as u64,
+        blas_bytes,
+        blas_bytes_uncompacted: blas_bytes,
+        tlas_bytes: (nodes.len() - blas_nodes) as u64 * node_size
+            + std::mem::size_of_val(&instances_padded[..]) as u64,
+        blas_seconds,
+        tlas_seconds: t1.elapsed().as_secs_f64(),
+        max_stack: need,
+        ..Default::default()
+    };
+    ctx.count_builds(meshes.len(), 1);
+    Ok(BvhScene {
+        header: header_buffer,
+        header_data: header,
+        nodes: node_buffer,
+        _triangles: triangle_buffer,
+        instances: instance_buffer,
+        bottoms,
+        blas_nodes,
+        top_capacity,
+        stats,
+    })
+}
+
+/// What the top level needs of one mesh's bottom level.
+struct Bottom {
+    /// Root link, offset into the shared node array.
+    root: u32,
+    need: u32,
+    bounds: Aabb,
+    empty: bool,
+}
+
+/// The top level over instances of non-empty meshes with an invertible transform, then the
+/// shapes: its nodes (links offset by `offset`, where they will sit in the node array), the
+/// instance records in leaf order, the root link and the stack a walk needs.
+fn top_level(
+    scene: &GpuScene,
+    bottoms: &[Bottom],
+    offset: u32,
+) -> Result<(Vec<BvhNode>, Vec<BvhInstance>, u32, u32)> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut items: Vec<(Aabb, BvhInstance, u32)> = Vec::new();
     for (i, (mesh, rows)) in scene.instances.iter().enumerate() {
-        let m = &meshes[*mesh as usize];
+        let m = &bottoms[*mesh as usize];
         let Some(inv) = inverse_rows(rows) else {
             continue;
         };
-        if m.root == NONE {
+        if m.empty {
             continue;
         }
         let inst = BvhInstance {
             world_to_object: inv,
-            root: roots[*mesh as usize],
+            root: m.root,
             index: i as u32,
             mask: MASK_GEOMETRY,
             pad: 0,
@@ -273,53 +359,46 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
     let leaf_need = |first: u32, _| items[top.order[first as usize] as usize].2;
     let mut top_nodes = Vec::new();
     let (root, need) = nodes::collapse(&top, &mut top_nodes, &leaf_need);
-    let offset = nodes.len() as u32;
-    nodes.extend(top_nodes.iter().map(|n| BvhNode {
-        links: n.links.map(|l| nodes::offset_link(l, offset, 0)),
-        ..*n
-    }));
-    let root = nodes::offset_link(root, offset, 0);
+    let top_nodes = top_nodes
+        .iter()
+        .map(|n| BvhNode {
+            links: n.links.map(|l| nodes::offset_link(l, offset, 0)),
+            ..*n
+        })
+        .collect();
     if need > BVH_STACK_SIZE {
         return Err(Error::Invalid(format!(
             "the compute BVH is too deep: a walk may need {need} stack entries, the kernels have {BVH_STACK_SIZE}"
         )));
     }
+    Ok((
+        top_nodes,
+        instances,
+        nodes::offset_link(root, offset, 0),
+        need,
+    ))
+}
 
-    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let node_buffer = ctx.upload("BVH nodes", &nodes, storage)?;
-    let triangle_buffer = ctx.upload("BVH triangles", &triangles, storage)?;
-    let instance_buffer = ctx.upload("BVH instances", &instances, storage)?;
-    let header = BvhHeader {
-        nodes: node_buffer.address,
-        triangles: triangle_buffer.address,
-        instances: instance_buffer.address,
-        root,
-        node_count: nodes.len() as u32,
-    };
-    let header_buffer = ctx.upload(
-        "BVH header",
-        std::slice::from_ref(&header),
-        vk::BufferUsageFlags::UNIFORM_BUFFER,
-    )?;
-    let node_size = std::mem::size_of::<BvhNode>() as u64;
-    let blas_bytes = blas_nodes as u64 * node_size + std::mem::size_of_val(&triangles[..]) as u64;
-    let stats = BuildStats {
-        blas_count: meshes.len(),
-        triangles: triangles.len() as u64,
-        blas_bytes,
-        blas_bytes_uncompacted: blas_bytes,
-        tlas_bytes: (nodes.len() - blas_nodes) as u64 * node_size
-            + std::mem::size_of_val(&instances[..]) as u64,
-        blas_seconds,
-        tlas_seconds: t1.elapsed().as_secs_f64(),
-        max_stack: need,
-        ..Default::default()
-    };
-    Ok(BvhScene {
-        header: header_buffer,
-        _nodes: node_buffer,
-        _triangles: triangle_buffer,
-        _instances: instance_buffer,
-        stats,
-    })
+impl BvhScene {
+    /// Builds the top level again over moved instances and writes it in place: the bottom
+    /// levels (nodes and triangles) stay as they are on the device.
+    pub fn update_top(&mut self, ctx: &Context, scene: &GpuScene) -> Result<f64> {
+        let t = Instant::now();
+        let (top, instances, root, need) = top_level(scene, &self.bottoms, self.blas_nodes as u32)?;
+        if top.len() > self.top_capacity {
+            return Err(Error::Invalid(format!(
+                "the top level grew to {} nodes, past the {} reserved",
+                top.len(),
+                self.top_capacity
+            )));
+        }
+        let node_size = std::mem::size_of::<BvhNode>() as u64;
+        ctx.write(&self.nodes, self.blas_nodes as u64 * node_size, &top)?;
+        ctx.write(&self.instances, 0, &instances)?;
+        self.header_data.root = root;
+        ctx.write(&self.header, 0, std::slice::from_ref(&self.header_data))?;
+        self.stats.max_stack = self.stats.max_stack.max(need);
+        ctx.count_builds(0, 1);
+        Ok(t.elapsed().as_secs_f64())
+    }
 }
