@@ -1,5 +1,5 @@
-//! `illum compare`: several direct-lighting techniques rendered for the same time, with their
-//! error table, error-against-time curves and an image strip with error heat-maps.
+//! `illum compare`: several integrators or direct-lighting techniques rendered for the same time,
+//! with their error table, error-against-time curves and an image strip with error heat-maps.
 
 use super::render::{announce_compiles, progress_bar};
 use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
@@ -15,10 +15,16 @@ use std::sync::atomic::Ordering;
 pub struct CompareArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Techniques to compare, comma separated, each once: brdf, light, mis.
-    #[arg(long, default_value = "brdf,light,mis", value_delimiter = ',')]
-    pub techniques: Vec<Technique>,
-    /// Seconds of rendering per technique.
+    /// Techniques to compare, comma separated, each once: brdf, light, mis. [default:
+    /// brdf,light,mis; mis with --integrators]
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub techniques: Option<Vec<Technique>>,
+    /// Integrators to compare, comma separated, each once: direct, full, full-nocache (the full
+    /// integrator's partition by brute force, --radiosity-cache off), path. Each renders with
+    /// each technique. [default: the one --integrator names]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = ["direct", "full", "full-nocache", "path"])]
+    pub integrators: Vec<String>,
+    /// Seconds of rendering per technique or integrator.
     #[arg(long, default_value_t = 5.0)]
     pub time: f64,
     /// Reference image (EXR, same resolution); without one, the relMSE is estimated from the
@@ -26,7 +32,7 @@ pub struct CompareArgs {
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Prefix of the outputs: PREFIX-error.png (curves), PREFIX-strip.png (images and error
-    /// maps), PREFIX-<technique>.exr.
+    /// maps), PREFIX-<name>.exr (a technique's or integrator's name).
     #[arg(short, long, default_value = "compare")]
     pub output: PathBuf,
     /// Seed of the per-sample random streams (the same for every technique).
@@ -45,30 +51,73 @@ pub struct CompareArgs {
     pub quiet: bool,
 }
 
-pub fn run(a: &CompareArgs) -> Result<()> {
-    if a.techniques.is_empty() {
+/// One rendering of the comparison: its name and integrator settings.
+struct Run {
+    name: String,
+    integrator: crate::render::IntegratorSettings,
+}
+
+fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
+    let techniques = match &a.techniques {
+        Some(t) => t.clone(),
+        None if a.integrators.is_empty() => vec![Technique::Brdf, Technique::Light, Technique::Mis],
+        None => vec![Technique::Mis],
+    };
+    if techniques.is_empty() {
         bail!("--techniques: name at least one of brdf, light, mis");
     }
-    for (i, t) in a.techniques.iter().enumerate() {
-        if a.techniques[..i].contains(t) {
-            bail!(
-                "--techniques: {} is named twice (each technique renders once, to {}-{}.exr)",
-                t.name(),
-                a.output.display(),
-                t.name()
-            );
+    let mut runs = Vec::new();
+    let integrators: Vec<Option<&str>> = if a.integrators.is_empty() {
+        vec![None]
+    } else {
+        a.integrators.iter().map(|s| Some(s.as_str())).collect()
+    };
+    for integrator in &integrators {
+        for &t in &techniques {
+            let mut it = a.integrator.settings(t, scene);
+            if let Some(spec) = integrator {
+                it.kind = match *spec {
+                    "direct" => crate::render::IntegratorKind::Direct,
+                    "path" => crate::render::IntegratorKind::Path,
+                    _ => crate::render::IntegratorKind::Full,
+                };
+                it.radiosity_cache = *spec != "full-nocache";
+            }
+            let name = match (integrator, techniques.len()) {
+                (None, _) => t.name().to_string(),
+                (Some(i), 1) => i.to_string(),
+                (Some(i), _) => format!("{i}-{}", t.name()),
+            };
+            if runs.iter().any(|r: &Run| r.name == name) {
+                bail!(
+                    "--techniques, --integrators: {name} is named twice (each renders once, to \
+                     {}-{name}.exr)",
+                    a.output.display()
+                );
+            }
+            runs.push(Run {
+                name,
+                integrator: it,
+            });
         }
     }
+    Ok(runs)
+}
+
+pub fn run(a: &CompareArgs) -> Result<()> {
+    let scene = a.scene.load()?;
+    let runs = runs(a, &scene)?;
     let with_suffix = |s: &str| PathBuf::from(format!("{}-{s}", a.output.display()));
-    let exr_of = |t: Technique| with_suffix(&format!("{}.exr", t.name()));
     let (plot_path, strip_path) = (with_suffix("error.png"), with_suffix("strip.png"));
-    let exrs: Vec<PathBuf> = a.techniques.iter().map(|&t| exr_of(t)).collect();
+    let exrs: Vec<PathBuf> = runs
+        .iter()
+        .map(|r| with_suffix(&format!("{}.exr", r.name)))
+        .collect();
     check_outputs(
         exrs.iter()
             .chain([&plot_path, &strip_path])
             .map(PathBuf::as_path),
     )?;
-    let scene = a.scene.load()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a
         .reference
@@ -81,10 +130,10 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         validation: false,
     })?;
     let renderer = Renderer::new(ctx.clone());
-    let mut rows: Vec<(Technique, RenderOutput)> = Vec::new();
-    for (&t, exr) in a.techniques.iter().zip(&exrs) {
+    let mut rows: Vec<(String, RenderOutput)> = Vec::new();
+    for (run, exr) in runs.iter().zip(&exrs) {
         let settings = RenderSettings {
-            integrator: a.integrator.settings(t, &scene),
+            integrator: run.integrator,
             spp: 1 << 20,
             time: Some(a.time),
             seed: a.seed,
@@ -95,7 +144,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             ..Default::default()
         };
         if !a.quiet {
-            eprintln!("illum compare: {} for {} s ...", t.name(), a.time);
+            eprintln!("illum compare: {} for {} s ...", run.name, a.time);
         }
         let bar = progress_bar(a.quiet, settings.spp, Some(a.time));
         let setup_done = announce_compiles(&ctx, &bar, a.quiet);
@@ -129,7 +178,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             }
             .into());
         }
-        rows.push((t, out));
+        rows.push((run.name.clone(), out));
     }
     let measured = reference.is_some();
     let error_of = |p: &PassReport| {
@@ -140,8 +189,12 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         }
     };
     println!(
-        "{:<10} {:>8} {:>10} {:>14} {:>14}",
-        "technique",
+        "{:<14} {:>8} {:>10} {:>14} {:>14}",
+        if a.integrators.is_empty() {
+            "technique"
+        } else {
+            "integrator"
+        },
         "spp",
         "seconds",
         if measured { "relMSE" } else { "est. relMSE" },
@@ -152,15 +205,15 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         let last = out.passes.last().cloned().unwrap_or_default();
         let err = error_of(&last).unwrap_or(f64::NAN);
         println!(
-            "{:<10} {:>8} {:>10.3} {:>14.4e} {:>14.4e}",
-            t.name(),
+            "{:<14} {:>8} {:>10.3} {:>14.4e} {:>14.4e}",
+            t,
             last.spp,
             last.wall_seconds,
             err,
             1.0 / (err * last.wall_seconds)
         );
         series.push(crate::report::Series {
-            name: t.name().to_string(),
+            name: t.clone(),
             points: out
                 .passes
                 .iter()
@@ -175,7 +228,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     }
     crate::report::plot_error(
         &plot_path,
-        &format!("{:.1} s per technique", a.time),
+        &format!("{:.1} s each", a.time),
         if measured {
             "relMSE"
         } else {
@@ -196,7 +249,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         .map(|((t, out), error)| crate::report::Panel {
             label: format!(
                 "{} {}spp {:.1e}",
-                t.name(),
+                t,
                 out.stats.spp,
                 out.passes.last().and_then(error_of).unwrap_or(f64::NAN)
             ),
@@ -207,7 +260,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     crate::report::image_strip(&strip_path, &panels)?;
     if !a.quiet {
         eprintln!(
-            "illum compare: wrote {}, {} and {}-<technique>.exr",
+            "illum compare: wrote {}, {} and {}-<name>.exr",
             plot_path.display(),
             strip_path.display(),
             a.output.display()

@@ -137,19 +137,19 @@ pub struct IntegratorArgs {
     /// direct: direct lighting only; full: direct lighting, indirect diffuse through the radiosity
     /// cache, and reflections (caustics left out); path: brute-force path tracer (all light
     /// paths). [default: the scene's "integrator", else direct]
-    #[arg(long)]
+    #[arg(long, value_name = "KIND")]
     pub integrator: Option<crate::render::IntegratorKind>,
     /// path: the most path segments, as Mitsuba's max_depth (1: emission seen directly, 2: direct
     /// lighting, -1: unbounded). [default: the scene's, else -1]
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub max_depth: Option<i32>,
     /// full: the most specular bounces of the reflection integrator, 0 to 64. [default: the
     /// scene's, else 4]
-    #[arg(long)]
+    #[arg(long, value_name = "N")]
     pub specular_depth: Option<u32>,
     /// full: indirect diffuse through the radiosity cache (on) or by brute force (off), to
     /// measure the cache's bias and gain. [default: the scene's, else on]
-    #[arg(long, value_parser = ["on", "off"])]
+    #[arg(long, value_name = "MODE", value_parser = ["on", "off"])]
     pub radiosity_cache: Option<String>,
     /// How light samples pick lights in scenes of more than 32 lights: tree (the light tree), scan
     /// (a linear scan over every light, as before the tree) or loop (every light at every point).
