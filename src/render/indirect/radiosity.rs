@@ -79,10 +79,11 @@ impl CacheShape {
         }
         let paths = width.div_ceil(block) * height.div_ceil(block);
         // Cells are at most half the slots; a generation's records name up to `keys` cells and
-        // cells live MAX_AGE generations: 8x (measured on scenes/interior.json at 320x240:
-        // 2x evicted live cells and cost 25% more time in bounces done in place).
+        // cells live MAX_AGE generations. Measured on scenes/interior.json at 320x240: 92k cells
+        // for 29k keys per generation; 4x the keys as slots evicted live cells and cost 25% more
+        // time in bounces done in place, 8x holds them all.
         let keys = u64::from(paths.max(WARMUP_PATHS)) * u64::from(VERTICES * RADIOSITY_RECORD_KEYS);
-        let slots = (16 * keys)
+        let slots = (8 * keys)
             .next_power_of_two()
             .clamp(1 << 12, u64::from(MAX_SLOTS)) as u32;
         let rho = f64::from(max_albedo);
