@@ -161,31 +161,7 @@ impl Context {
             usage | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
-        if bytes.is_empty() {
-            return Ok(dst);
-        }
-        let mut staging = self.create_buffer(
-            &format!("{name} (staging)"),
-            bytes.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        staging
-            .mapped()
-            .ok_or_else(|| Error::Invalid("staging buffer is not host visible".into()))?
-            [..bytes.len()]
-            .copy_from_slice(bytes);
-        self.one_shot(|cmd| {
-            // SAFETY: both buffers are alive until the submission completes.
-            unsafe {
-                self.device.cmd_copy_buffer(
-                    cmd,
-                    staging.buffer,
-                    dst.buffer,
-                    &[vk::BufferCopy::default().size(bytes.len() as u64)],
-                )
-            }
-        })?;
+        self.stage(name, &dst, 0, bytes)?;
         Ok(dst)
     }
 
@@ -204,11 +180,16 @@ impl Context {
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.uploaded_bytes
             .fetch_add(bytes.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        self.stage("write", dst, offset, bytes)
+    }
+
+    /// Copies `bytes` into `dst` at `offset` through a staging buffer, and waits.
+    fn stage(&self, name: &str, dst: &Buffer, offset: u64, bytes: &[u8]) -> Result<()> {
         if bytes.is_empty() {
             return Ok(());
         }
         let mut staging = self.create_buffer(
-            "write (staging)",
+            &format!("{name} (staging)"),
             bytes.len() as u64,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
@@ -220,7 +201,7 @@ impl Context {
             .copy_from_slice(bytes);
         self.one_shot(|cmd| {
             // SAFETY: both buffers are alive until the submission completes; every earlier
-            // submission reading `dst` has completed (one_shot waits).
+            // submission using `dst` has completed (one_shot waits).
             unsafe {
                 self.device.cmd_copy_buffer(
                     cmd,
