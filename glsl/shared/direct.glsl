@@ -218,6 +218,95 @@ vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
     return trace_occluded(sh.origin, seg / len, 0.0, tmax, MASK_OCCLUDERS) ? vec3(0.0) : c;
 }
 
+// Fewer shadow rays (TECHNIQUES.md 4.2, 4.3). Every candidate (a light or BRDF sample with its
+// unshadowed, MIS-weighted contribution c_i, so that the plain estimate is sum_i V_i c_i) goes
+// through shadow_candidate; with neither feature it is traced at once, as before.
+//
+// Culling (FEATURE_SHADOW_CULL, Russian roulette): with p_i = luminance(c_i) and threshold t, the
+// candidate is kept with probability q_i = min(1, p_i / t) and then counts c_i / q_i:
+// E[kept c_i V_i / q_i] = c_i V_i, so the estimate stays unbiased (a hard cutoff would not be).
+//
+// Resampling (FEATURE_SHADOW_RESAMPLE): the candidates of a group (below) are held back; of its M
+// non-zero ones, K = ceil(pct M) picks are made by systematic resampling on p_i: with
+// W = sum_i p_i, one u in [0, 1) and positions (k + u) W / K, k < K, along the running sum of the
+// p_i, candidate i gets n_i picks, E[n_i] = K p_i / W exactly. It is traced once and counts
+//     n_i (W / K) V_i c_i / p_i,
+// so E[. | candidates] = sum_i (K p_i / W)(W / K) V_i c_i / p_i = sum_i V_i c_i: unbiased. At most
+// K rays (fewer when a candidate is picked more than once); K >= M traces every candidate as is.
+// Groups: the light samples of one looped light; all light samples that pick a light (tree, scan);
+// the BRDF samples of one lobe (over every light they hit); and a group closes early when
+// SHADOW_GROUP_MAX candidates wait. Any grouping fixed by the candidates keeps the estimate
+// unbiased; groups only change its variance.
+#define SHADOW_GROUP_MAX 16u
+vec3 g_cand_w[SHADOW_GROUP_MAX];
+vec3 g_cand_c[SHADOW_GROUP_MAX];
+float g_cand_dist[SHADOW_GROUP_MAX];
+float g_cand_p[SHADOW_GROUP_MAX];
+uint g_cand_n = 0u;
+
+// Traces shadow rays for the waiting candidates (resampled) and returns their contribution.
+vec3 shadow_flush(Shading sh, inout Rng rng) {
+    uint m = g_cand_n;
+    g_cand_n = 0u;
+    vec3 sum = vec3(0.0);
+    if (m == 0u) return sum;
+    uint k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
+    if (k >= m) {
+        for (uint i = 0u; i < m; ++i) sum += shadowed(sh, g_cand_w[i], g_cand_dist[i], g_cand_c[i]);
+        return sum;
+    }
+    float wsum = 0.0;
+    for (uint i = 0u; i < m; ++i) wsum += g_cand_p[i];
+    float stride = wsum / float(k);
+    float pos = rng_next(rng) * stride;
+    float cum = 0.0;
+    uint taken = 0u;
+    for (uint i = 0u; i < m && taken < k; ++i) {
+        cum += g_cand_p[i];
+        uint picks = 0u;
+        while (taken + picks < k && pos < cum) {
+            picks += 1u;
+            pos += stride;
+        }
+        // The last candidate takes the picks that rounding of the running sum left over.
+        if (i + 1u == m) picks = k - taken;
+        taken += picks;
+        if (picks > 0u)
+            sum += shadowed(sh, g_cand_w[i], g_cand_dist[i], g_cand_c[i] * (float(picks) * stride / g_cand_p[i]));
+    }
+    return sum;
+}
+
+// One candidate of contribution c along w (light point at dist): culled, held back for
+// resampling, or traced now. Returns what it adds now (held-back ones add at the next flush).
+vec3 shadow_candidate(Shading sh, vec3 w, float dist, vec3 c, inout Rng rng) {
+    if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
+    float p = luminance(c);
+    if (has_feature(FEATURE_SHADOW_CULL) && p > 0.0 && p < frame.shadow_cull) {
+        float q = p / frame.shadow_cull;
+        if (rng_next(rng) >= q) return vec3(0.0);
+        c /= q;
+        p /= q;
+    }
+    if (has_feature(FEATURE_SHADOW_RESAMPLE) && p > 0.0) {
+        vec3 flushed = vec3(0.0);
+        if (g_cand_n == SHADOW_GROUP_MAX) flushed = shadow_flush(sh, rng);
+        g_cand_w[g_cand_n] = w;
+        g_cand_c[g_cand_n] = c;
+        g_cand_dist[g_cand_n] = dist;
+        g_cand_p[g_cand_n] = p;
+        g_cand_n += 1u;
+        return flushed;
+    }
+    return shadowed(sh, w, dist, c);
+}
+
+// Closes a resampling group (nothing without FEATURE_SHADOW_RESAMPLE).
+vec3 shadow_group_end(Shading sh, inout Rng rng) {
+    if (!has_feature(FEATURE_SHADOW_RESAMPLE)) return vec3(0.0);
+    return shadow_flush(sh, rng);
+}
+
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
@@ -275,9 +364,11 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, n_b);
                 // Divide by the expected count n_l (many lights: the selection probability is in it).
                 vec3 c = f * le / (ls.pdf * n_l);
-                result += shadowed(sh, ls.wi, ls.dist, c);
+                result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
             }
+            if (!picked) result += shadow_group_end(sh, rng);
         }
+        result += shadow_group_end(sh, rng);
     }
 
     // BRDF samples: each specular lobe, and the diffuse lobe where it is BRDF-sampled; every light
@@ -322,9 +413,10 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                         w = mis_power(float(n_b), pdf, n_l, lh.pdf);
                     }
                     vec3 c = weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
-                    result += shadowed(sh, wi, lh.t, c);
+                    result += shadow_candidate(sh, wi, lh.t, c, rng);
                 }
             }
+            result += shadow_group_end(sh, rng);
         }
     }
     return result;

@@ -40,6 +40,11 @@
 #define FEATURE_TRIANGLE_LIGHTS 64
 // More than DIRECT_LOOP_LIGHTS lights: light samples pick lights (Frame.light_select).
 #define FEATURE_MANY_LIGHTS 128
+// Settings, not the scene: shadow rays for a resampled subset of the candidates
+// (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
+// Off, their code is left out of the kernels (glsl/shared/direct.glsl, TECHNIQUES.md 4.2, 4.3).
+#define FEATURE_SHADOW_RESAMPLE 256
+#define FEATURE_SHADOW_CULL 512
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8
@@ -205,8 +210,10 @@ struct Frame {
     uint radiosity_levels;    // cell edges radiosity_cell * 2^l, l < radiosity_levels
     float radiosity_cell;     // finest cell edge (scene units)
     float diffuse_spread;     // ray-cone spread angle a diffuse bounce starts (radians)
-    uint pad0;
-    uint pad1;
+    float shadow_resample;    // share of a group's candidates that get shadow rays (with
+                              // FEATURE_SHADOW_RESAMPLE; 1: all)
+    float shadow_cull;        // Russian roulette threshold on a candidate's luminance (with
+                              // FEATURE_SHADOW_CULL; 0: off)
     uint pad2;
 };
 
@@ -401,8 +408,10 @@ struct QueryRay {
     vec3 dir;
     float tmax;
     uint mask;
-    uint pad0;
-    uint pad1;
+    float shadow_resample;    // share of a group's candidates that get shadow rays (with
+                              // FEATURE_SHADOW_RESAMPLE; 1: all)
+    float shadow_cull;        // Russian roulette threshold on a candidate's luminance (with
+                              // FEATURE_SHADOW_CULL; 0: off)
     uint pad2;
 };
 

@@ -24,13 +24,15 @@ pub fn settings_text(s: &RenderSettings) -> String {
         ),
     };
     format!(
-        "integrator={} {integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} clamp={} nan_every={}",
+        "integrator={} {integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} shadow_resample={} shadow_cull={} clamp={} nan_every={}",
         it.kind.name(),
         it.technique.name(),
         it.light_samples,
         it.brdf_samples,
         it.diffuse_mis,
         it.light_selection.name(),
+        it.shadow_resample,
+        it.shadow_cull,
         s.clamp.map_or("off".into(), |c| c.to_string()),
         s.inject_non_finite
     )

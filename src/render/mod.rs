@@ -208,7 +208,7 @@ impl Renderer {
         let mut frame_constants = gpu.frame;
         crate::gpu_scene::set_camera(&mut frame_constants, camera, gpu.origin);
         let integrator = integrator::select(settings);
-        let kernel = match prepared.take_kernels(integrator.name()) {
+        let kernel = match prepared.take_kernels(integrator.name(), integrator.features()) {
             Some(k) => k,
             None => integrator.kernels(ctx, prepared)?,
         };
@@ -459,7 +459,7 @@ impl Renderer {
                 break;
             }
         }
-        prepared.keep_kernels(integrator.name(), kernel);
+        prepared.keep_kernels(integrator.name(), integrator.features(), kernel);
         Ok(outputs)
     }
 }

@@ -139,6 +139,27 @@ pub struct IntegratorSettings {
     pub diffuse_mis: bool,
     /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
     pub light_selection: LightSelection,
+    /// Share of each group's shadow-ray candidates that get shadow rays, picked by systematic
+    /// resampling on their unshadowed luminance (TECHNIQUES.md §4.2); 1: all, as without it.
+    pub shadow_resample: f32,
+    /// Russian roulette on each candidate before its shadow ray: kept with probability
+    /// min(1, luminance / this), then divided by it (TECHNIQUES.md §4.3); 0: off.
+    pub shadow_cull: f32,
+}
+
+impl IntegratorSettings {
+    /// The feature bits these settings add to the scene's in every kernel that lights with
+    /// direct_lighting (code for what is off is left out).
+    pub fn kernel_features(&self) -> u32 {
+        let mut f = 0;
+        if self.shadow_resample < 1.0 {
+            f |= crate::layout::FEATURE_SHADOW_RESAMPLE;
+        }
+        if self.shadow_cull > 0.0 {
+            f |= crate::layout::FEATURE_SHADOW_CULL;
+        }
+        f
+    }
 }
 
 impl Default for IntegratorSettings {
@@ -153,6 +174,8 @@ impl Default for IntegratorSettings {
             brdf_samples: 2,
             diffuse_mis: false,
             light_selection: LightSelection::Tree,
+            shadow_resample: 1.0,
+            shadow_cull: 0.0,
         }
     }
 }
@@ -226,6 +249,18 @@ impl RenderSettings {
             return Err(Error::Invalid(format!(
                 "light and BRDF sample counts must be in 1..=64, got {} and {}",
                 it.light_samples, it.brdf_samples
+            )));
+        }
+        if !(it.shadow_resample > 0.0 && it.shadow_resample <= 1.0) {
+            return Err(Error::Invalid(format!(
+                "the shadow resample share must be in (0, 1], got {}",
+                it.shadow_resample
+            )));
+        }
+        if !(it.shadow_cull >= 0.0 && it.shadow_cull.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "the shadow cull threshold must be finite and at least 0, got {}",
+                it.shadow_cull
             )));
         }
         if it.max_depth == 0 || it.max_depth < -1 {
