@@ -36,6 +36,7 @@
 #include "light_sampling.glsl"
 #include "mis.glsl"
 #include "light_tree.glsl"
+#include "irradiance.glsl"
 
 #define DIRECT_MAX_CROSSED 16u
 #define LIGHT_BVH_STACK 32u
@@ -307,6 +308,44 @@ vec3 shadow_group_end(Shading sh, inout Rng rng) {
     return shadow_flush(sh, rng);
 }
 
+// Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped rect, disk or sphere
+// light of uniform radiance L, the N light samples' diffuse terms g_j = (rho/pi) L max(0, n.w_j)
+// / (pdf_j N) (zero where eval_lobes gives zero: below n's or ng's horizon) have the analytic
+// unshadowed sum G = (rho/pi) L light_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
+// normal that differs from ng zeroes samples that G counts). With V_j the shadow rays' answers:
+//   avgvis (the course):  sum_j g_j V_j + a (G - sum_j g_j),  a = visible / traced:
+//     biased (-Cov(a, sum_j g_j)), consistent; zero variance where fully lit.
+//   loo (leave one out):  sum_j [g_j V_j + a_j (G/N - g_j)],  a_j = a without sample j:
+//     a_j is independent of sample j, so E[a_j (G/N - g_j)] = E[a_j] * 0: unbiased.
+// A sample is "traced" when g_j > 0; a_j = 0 when no other sample was traced; samples with
+// g_j = 0 count in N and take a_j = a. Below, the sums are scalars in units of rho L / pi:
+// sv, so = sum of max(0, n.w_j) / (pdf_j N) over the visible / occluded traced samples (each an
+// estimate of E / L), vis and tr the counts. The specular terms are left as they are.
+bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffuse_mis) {
+    if (l.kind != LIGHT_RECT && l.kind != LIGHT_DISK && l.kind != LIGHT_SPHERE) return false;
+    if (l.texture != NONE || light_self(l)) return false;
+    if (technique == TECHNIQUE_BRDF || (technique == TECHNIQUE_MIS && diffuse_mis)) return false;
+    return max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0;
+}
+
+vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float vis, float tr) {
+    float g = light_irradiance(l, sh.p, sh.n);   // E / L: the expectation of sv + so unshadowed
+    float a = tr > 0.0 ? vis / tr : 0.0;
+    float k;
+    if (frame.control_variates == CONTROL_VARIATES_LOO) {
+        // sum_j a_j (G/N - g_j): untraced samples a G/N; visible ones (vis-1)/(tr-1) (G/N - g_j);
+        // occluded ones vis/(tr-1) (G/N - g_j).
+        k = (n - tr) * a * g / n;
+        if (tr > 1.0) {
+            k += (vis - 1.0) / (tr - 1.0) * (vis * g / n - sv);
+            k += vis / (tr - 1.0) * ((tr - vis) * g / n - so);
+        }
+    } else {
+        k = a * (g - sv - so);
+    }
+    return sh.albedo * l.radiance * (k * INV_PI);
+}
+
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
@@ -357,6 +396,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 count = light_count_for(l, sh.p, n_max);
                 n_l = float(count);
             }
+            bool cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
+            float cv_sv = 0.0, cv_so = 0.0, cv_vis = 0.0, cv_tr = 0.0;
             for (uint j = 0u; j < count; ++j) {
                 LightSample ls = sample_light(l, dome, sh.p, rng_next2(rng));
                 if (!(ls.pdf > 0.0)) continue;
@@ -364,8 +405,26 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, n_b);
                 // Divide by the expected count n_l (many lights: the selection probability is in it).
                 vec3 c = f * le / (ls.pdf * n_l);
-                result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
+                if (cv) {
+                    // g_j / (rho L / pi): the diffuse part of c, zero where eval_lobes is.
+                    float cs = dot(sh.n, ls.wi);
+                    float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
+                    vec3 r = shadowed(sh, ls.wi, ls.dist, c);
+                    if (s > 0.0) {
+                        cv_tr += 1.0;
+                        if (max(r.r, max(r.g, r.b)) > 0.0) {
+                            cv_vis += 1.0;
+                            cv_sv += s;
+                        } else {
+                            cv_so += s;
+                        }
+                    }
+                    result += r;
+                } else {
+                    result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
+                }
             }
+            if (cv) result += control_variate(sh, l, float(count), cv_sv, cv_so, cv_vis, cv_tr);
             if (!picked) result += shadow_group_end(sh, rng);
         }
         result += shadow_group_end(sh, rng);

@@ -163,6 +163,10 @@ pub struct IntegratorArgs {
     /// luminance / this), unbiased (TECHNIQUES.md 4.3); 0: off.
     #[arg(long, value_name = "T", default_value_t = 0.0)]
     pub shadow_cull: f32,
+    /// Control variates for diffuse light samples of rect, disk and sphere lights: off, avgvis
+    /// (the course's average visibility: biased, consistent) or loo (leave one out: unbiased).
+    #[arg(long, value_name = "MODE", default_value = "off")]
+    pub control_variates: crate::render::ControlVariates,
 }
 
 impl IntegratorArgs {
@@ -194,6 +198,7 @@ impl IntegratorArgs {
             light_selection: self.light_selection,
             shadow_resample: self.shadow_resample,
             shadow_cull: self.shadow_cull,
+            control_variates: self.control_variates,
         }
     }
 }
@@ -246,6 +251,10 @@ pub fn image_metadata(
             it.shadow_resample.to_string(),
         ),
         ("illum.shadowCull".into(), it.shadow_cull.to_string()),
+        (
+            "illum.controlVariates".into(),
+            it.control_variates.name().into(),
+        ),
         (
             "illum.nonFiniteSamples".into(),
             s.non_finite_samples.to_string(),

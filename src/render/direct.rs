@@ -3,7 +3,7 @@
 //! Lighting at Pixar" does (TECHNIQUES.md §3).
 
 use super::integrator::{Integrator, IntegratorPasses};
-use super::{IntegratorSettings, LightSelection, PreparedScene, Technique};
+use super::{ControlVariates, IntegratorSettings, LightSelection, PreparedScene, Technique};
 use crate::error::Result;
 use crate::layout::*;
 use crate::shaders;
@@ -79,6 +79,11 @@ pub fn configure_direct(it: &IntegratorSettings, frame: &mut Frame) {
     };
     frame.shadow_resample = it.shadow_resample;
     frame.shadow_cull = it.shadow_cull;
+    frame.control_variates = match it.control_variates {
+        ControlVariates::Off => 0,
+        ControlVariates::AvgVis => CONTROL_VARIATES_AVGVIS,
+        ControlVariates::Loo => CONTROL_VARIATES_LOO,
+    };
     // Without finite lights there is no tree: the (infinite) lights are looped over.
     frame.light_select = match it.light_selection {
         LightSelection::Tree if frame.light_tree != 0 => LIGHT_SELECT_TREE,

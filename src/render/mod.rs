@@ -21,7 +21,9 @@ use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
 pub use session::{ImageState, Pass, RenderSession, TargetImage};
-pub use settings::{IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique};
+pub use settings::{
+    ControlVariates, IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique,
+};
 
 use crate::error::{Error, Result};
 use crate::layout::*;

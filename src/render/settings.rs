@@ -117,6 +117,43 @@ impl std::str::FromStr for LightSelection {
     }
 }
 
+/// Control variates for the diffuse light samples of rect, disk and sphere lights (TECHNIQUES.md
+/// §5, glsl/shared/direct.glsl): the analytic unshadowed irradiance scaled by a visibility
+/// estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ControlVariates {
+    #[default]
+    Off,
+    /// The course's average visibility: biased (−Cov/N), consistent.
+    AvgVis,
+    /// Leave-one-out average visibility: unbiased.
+    Loo,
+}
+
+impl ControlVariates {
+    pub fn name(self) -> &'static str {
+        match self {
+            ControlVariates::Off => "off",
+            ControlVariates::AvgVis => "avgvis",
+            ControlVariates::Loo => "loo",
+        }
+    }
+}
+
+impl std::str::FromStr for ControlVariates {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "off" => Ok(ControlVariates::Off),
+            "avgvis" => Ok(ControlVariates::AvgVis),
+            "loo" => Ok(ControlVariates::Loo),
+            _ => Err(format!(
+                "unknown control variates {s:?} (expected off, avgvis or loo)"
+            )),
+        }
+    }
+}
+
 /// The integrator and its sample counts and switches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntegratorSettings {
@@ -145,6 +182,8 @@ pub struct IntegratorSettings {
     /// Russian roulette on each candidate before its shadow ray: kept with probability
     /// min(1, luminance / this), then divided by it (TECHNIQUES.md §4.3); 0: off.
     pub shadow_cull: f32,
+    /// Control variates for diffuse light samples (off: none).
+    pub control_variates: ControlVariates,
 }
 
 impl IntegratorSettings {
@@ -157,6 +196,9 @@ impl IntegratorSettings {
         }
         if self.shadow_cull > 0.0 {
             f |= crate::layout::FEATURE_SHADOW_CULL;
+        }
+        if self.control_variates != ControlVariates::Off {
+            f |= crate::layout::FEATURE_CONTROL_VARIATES;
         }
         f
     }
@@ -176,6 +218,7 @@ impl Default for IntegratorSettings {
             light_selection: LightSelection::Tree,
             shadow_resample: 1.0,
             shadow_cull: 0.0,
+            control_variates: ControlVariates::Off,
         }
     }
 }
@@ -262,6 +305,15 @@ impl RenderSettings {
                 "the shadow cull threshold must be finite and at least 0, got {}",
                 it.shadow_cull
             )));
+        }
+        if it.control_variates != ControlVariates::Off
+            && (it.shadow_resample < 1.0 || it.shadow_cull > 0.0)
+        {
+            return Err(Error::Invalid(
+                "control variates need every light sample's shadow ray: they do not combine \
+                 with --shadow-resample or --shadow-cull"
+                    .into(),
+            ));
         }
         if it.max_depth == 0 || it.max_depth < -1 {
             return Err(Error::Invalid(format!(
