@@ -208,3 +208,35 @@ fn leave_one_out_is_unbiased_in_a_penumbra() {
     eprintln!("variance of the block means: loo / plain = {:.3}", vl / vp);
     assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn fully_shadowed_plane_is_black() {
+    // A 40x40 opaque sheet between the camera (below it) and the 8x8 rect light: every shadow ray
+    // of every floor point is blocked, so the visibility estimate is 0 and so is the control's
+    // term: the pixels are exactly 0, for both forms (without the visibility factor, the control
+    // would add G).
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    let json = scene_json(
+        r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [8, 8]}"#,
+        false,
+    )
+    .replace(
+        r#""material": "m"}}"#,
+        r#""material": "m"}, "sheet": {"rect": {"center": [0, 0.5, 0], "normal": [0, -1, 0], "size": [40, 40]}, "material": "m"}}"#,
+    );
+    assert!(json.contains("sheet"));
+    for cv in [ControlVariates::AvgVis, ControlVariates::Loo] {
+        let outs = render(&renderer, &json, &settings(cv, 2), &[5, 6]);
+        for o in &outs {
+            for p in &o.film.beauty {
+                assert_eq!(*p, [0.0; 3], "{}: a shadowed pixel is lit", cv.name());
+            }
+            assert!(
+                o.stats.rays > u64::from(W * H * 2),
+                "shadow rays were traced"
+            );
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}
