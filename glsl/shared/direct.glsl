@@ -36,6 +36,7 @@
 #include "light_sampling.glsl"
 #include "mis.glsl"
 #include "light_tree.glsl"
+#include "irradiance.glsl"
 
 #define DIRECT_MAX_CROSSED 16u
 #define LIGHT_BVH_STACK 32u
@@ -218,6 +219,133 @@ vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
     return trace_occluded(sh.origin, seg / len, 0.0, tmax, MASK_OCCLUDERS) ? vec3(0.0) : c;
 }
 
+// Fewer shadow rays (TECHNIQUES.md 4.2, 4.3). Every candidate (a light or BRDF sample with its
+// unshadowed, MIS-weighted contribution c_i, so that the plain estimate is sum_i V_i c_i) goes
+// through shadow_candidate; with neither feature it is traced at once, as before.
+//
+// Culling (FEATURE_SHADOW_CULL, Russian roulette): with p_i = luminance(c_i) and threshold t, the
+// candidate is kept with probability q_i = min(1, p_i / t) and then counts c_i / q_i:
+// E[kept c_i V_i / q_i] = c_i V_i, so the estimate stays unbiased (a hard cutoff would not be).
+//
+// Resampling (FEATURE_SHADOW_RESAMPLE): the candidates of a group (below) are held back; of its M
+// non-zero ones, K = ceil(pct M) picks are made by systematic resampling on p_i: with
+// W = sum_i p_i, one u in [0, 1) and positions (k + u) W / K, k < K, along the running sum of the
+// p_i, candidate i gets n_i picks, E[n_i] = K p_i / W exactly. It is traced once and counts
+//     n_i (W / K) V_i c_i / p_i,
+// so E[. | candidates] = sum_i (K p_i / W)(W / K) V_i c_i / p_i = sum_i V_i c_i: unbiased. At most
+// K rays (fewer when a candidate is picked more than once); K >= M traces every candidate as is.
+// Groups: the light samples of one looped light; all light samples that pick a light (tree, scan);
+// the BRDF samples of one lobe (over every light they hit); and a group closes early when
+// SHADOW_GROUP_MAX candidates wait. Any grouping fixed by the candidates keeps the estimate
+// unbiased; groups only change its variance.
+#define SHADOW_GROUP_MAX 16u
+vec3 g_cand_w[SHADOW_GROUP_MAX];
+vec3 g_cand_c[SHADOW_GROUP_MAX];
+float g_cand_dist[SHADOW_GROUP_MAX];
+float g_cand_p[SHADOW_GROUP_MAX];
+uint g_cand_n = 0u;
+
+// Traces shadow rays for the waiting candidates (resampled) and returns their contribution.
+vec3 shadow_flush(Shading sh, inout Rng rng) {
+    uint m = g_cand_n;
+    g_cand_n = 0u;
+    vec3 sum = vec3(0.0);
+    if (m == 0u) return sum;
+    uint k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
+    if (k >= m) {
+        for (uint i = 0u; i < m; ++i) sum += shadowed(sh, g_cand_w[i], g_cand_dist[i], g_cand_c[i]);
+        return sum;
+    }
+    float wsum = 0.0;
+    for (uint i = 0u; i < m; ++i) wsum += g_cand_p[i];
+    float stride = wsum / float(k);
+    float pos = rng_next(rng) * stride;
+    float cum = 0.0;
+    uint taken = 0u;
+    for (uint i = 0u; i < m && taken < k; ++i) {
+        cum += g_cand_p[i];
+        uint picks = 0u;
+        while (taken + picks < k && pos < cum) {
+            picks += 1u;
+            pos += stride;
+        }
+        // The last candidate takes the picks that rounding of the running sum left over.
+        if (i + 1u == m) picks = k - taken;
+        taken += picks;
+        if (picks > 0u)
+            sum += shadowed(sh, g_cand_w[i], g_cand_dist[i], g_cand_c[i] * (float(picks) * stride / g_cand_p[i]));
+    }
+    return sum;
+}
+
+// One candidate of contribution c along w (light point at dist): culled, held back for
+// resampling, or traced now. Returns what it adds now (held-back ones add at the next flush).
+vec3 shadow_candidate(Shading sh, vec3 w, float dist, vec3 c, inout Rng rng) {
+    if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
+    float p = luminance(c);
+    if (has_feature(FEATURE_SHADOW_CULL) && p > 0.0 && p < frame.shadow_cull) {
+        float q = p / frame.shadow_cull;
+        if (rng_next(rng) >= q) return vec3(0.0);
+        c /= q;
+        p /= q;
+    }
+    if (has_feature(FEATURE_SHADOW_RESAMPLE) && p > 0.0) {
+        vec3 flushed = vec3(0.0);
+        if (g_cand_n == SHADOW_GROUP_MAX) flushed = shadow_flush(sh, rng);
+        g_cand_w[g_cand_n] = w;
+        g_cand_c[g_cand_n] = c;
+        g_cand_dist[g_cand_n] = dist;
+        g_cand_p[g_cand_n] = p;
+        g_cand_n += 1u;
+        return flushed;
+    }
+    return shadowed(sh, w, dist, c);
+}
+
+// Closes a resampling group (nothing without FEATURE_SHADOW_RESAMPLE).
+vec3 shadow_group_end(Shading sh, inout Rng rng) {
+    if (!has_feature(FEATURE_SHADOW_RESAMPLE)) return vec3(0.0);
+    return shadow_flush(sh, rng);
+}
+
+// Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped rect, disk or sphere
+// light of uniform radiance L, the N light samples' diffuse terms g_j = (rho/pi) L max(0, n.w_j)
+// / (pdf_j N) (zero where eval_lobes gives zero: below n's or ng's horizon) have the analytic
+// unshadowed sum G = (rho/pi) L light_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
+// normal that differs from ng zeroes samples that G counts). With V_j the shadow rays' answers:
+//   avgvis (the course):  sum_j g_j V_j + a (G - sum_j g_j),  a = visible / traced:
+//     biased (-Cov(a, sum_j g_j)), consistent; zero variance where fully lit.
+//   loo (leave one out):  sum_j [g_j V_j + a_j (G/N - g_j)],  a_j = a without sample j:
+//     a_j is independent of sample j, so E[a_j (G/N - g_j)] = E[a_j] * 0: unbiased.
+// A sample is "traced" when g_j > 0; a_j = 0 when no other sample was traced; samples with
+// g_j = 0 count in N and take a_j = a. Below, the sums are scalars in units of rho L / pi:
+// sv, so = sum of max(0, n.w_j) / (pdf_j N) over the visible / occluded traced samples (each an
+// estimate of E / L), vis and tr the counts. The specular terms are left as they are.
+bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffuse_mis) {
+    if (l.kind != LIGHT_RECT && l.kind != LIGHT_DISK && l.kind != LIGHT_SPHERE) return false;
+    if (l.texture != NONE || light_self(l)) return false;
+    if (technique == TECHNIQUE_BRDF || (technique == TECHNIQUE_MIS && diffuse_mis)) return false;
+    return max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0;
+}
+
+vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float vis, float tr) {
+    float g = light_irradiance(l, sh.p, sh.n);   // E / L: the expectation of sv + so unshadowed
+    float a = tr > 0.0 ? vis / tr : 0.0;
+    float k;
+    if (frame.control_variates == CONTROL_VARIATES_LOO) {
+        // sum_j a_j (G/N - g_j): untraced samples a G/N; visible ones (vis-1)/(tr-1) (G/N - g_j);
+        // occluded ones vis/(tr-1) (G/N - g_j).
+        k = (n - tr) * a * g / n;
+        if (tr > 1.0) {
+            k += (vis - 1.0) / (tr - 1.0) * (vis * g / n - sv);
+            k += vis / (tr - 1.0) * ((tr - vis) * g / n - so);
+        }
+    } else {
+        k = a * (g - sv - so);
+    }
+    return sh.albedo * l.radiance * (k * INV_PI);
+}
+
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
@@ -268,6 +396,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 count = light_count_for(l, sh.p, n_max);
                 n_l = float(count);
             }
+            bool cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
+            float cv_sv = 0.0, cv_so = 0.0, cv_vis = 0.0, cv_tr = 0.0;
             for (uint j = 0u; j < count; ++j) {
                 LightSample ls = sample_light(l, dome, sh.p, rng_next2(rng));
                 if (!(ls.pdf > 0.0)) continue;
@@ -275,9 +405,29 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, n_b);
                 // Divide by the expected count n_l (many lights: the selection probability is in it).
                 vec3 c = f * le / (ls.pdf * n_l);
-                result += shadowed(sh, ls.wi, ls.dist, c);
+                if (cv) {
+                    // g_j / (rho L / pi): the diffuse part of c, zero where eval_lobes is.
+                    float cs = dot(sh.n, ls.wi);
+                    float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
+                    vec3 r = shadowed(sh, ls.wi, ls.dist, c);
+                    if (s > 0.0) {
+                        cv_tr += 1.0;
+                        if (max(r.r, max(r.g, r.b)) > 0.0) {
+                            cv_vis += 1.0;
+                            cv_sv += s;
+                        } else {
+                            cv_so += s;
+                        }
+                    }
+                    result += r;
+                } else {
+                    result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
+                }
             }
+            if (cv) result += control_variate(sh, l, float(count), cv_sv, cv_so, cv_vis, cv_tr);
+            if (!picked) result += shadow_group_end(sh, rng);
         }
+        result += shadow_group_end(sh, rng);
     }
 
     // BRDF samples: each specular lobe, and the diffuse lobe where it is BRDF-sampled; every light
@@ -322,9 +472,10 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                         w = mis_power(float(n_b), pdf, n_l, lh.pdf);
                     }
                     vec3 c = weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
-                    result += shadowed(sh, wi, lh.t, c);
+                    result += shadow_candidate(sh, wi, lh.t, c, rng);
                 }
             }
+            result += shadow_group_end(sh, rng);
         }
     }
     return result;

@@ -40,6 +40,14 @@
 #define FEATURE_TRIANGLE_LIGHTS 64
 // More than DIRECT_LOOP_LIGHTS lights: light samples pick lights (Frame.light_select).
 #define FEATURE_MANY_LIGHTS 128
+// Settings, not the scene: shadow rays for a resampled subset of the candidates
+// (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
+// Off, their code is left out of the kernels (glsl/shared/direct.glsl, TECHNIQUES.md 4.2, 4.3).
+#define FEATURE_SHADOW_RESAMPLE 256
+#define FEATURE_SHADOW_CULL 512
+// Settings: control variates for the diffuse light samples of rect, disk and sphere lights
+// (Frame.control_variates; TECHNIQUES.md 5).
+#define FEATURE_CONTROL_VARIATES 1024
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8
@@ -116,6 +124,10 @@
 // Frame.integrator_flags: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
 // course lights diffuse with light samples only).
 #define INTEGRATOR_DIFFUSE_MIS 1
+// Frame.control_variates (with FEATURE_CONTROL_VARIATES): the course's average visibility
+// (biased, consistent) or its leave-one-out form (unbiased).
+#define CONTROL_VARIATES_AVGVIS 1
+#define CONTROL_VARIATES_LOO 2
 // Radiosity cache (src/render/indirect/radiosity.rs): a world-space hashed grid. Lookups probe at
 // most RADIOSITY_PROBES consecutive entries; each update record names its cell at
 // RADIOSITY_RECORD_KEYS levels (the footprint's, then the next coarser one).
@@ -205,9 +217,11 @@ struct Frame {
     uint radiosity_levels;    // cell edges radiosity_cell * 2^l, l < radiosity_levels
     float radiosity_cell;     // finest cell edge (scene units)
     float diffuse_spread;     // ray-cone spread angle a diffuse bounce starts (radians)
-    uint pad0;
-    uint pad1;
-    uint pad2;
+    float shadow_resample;    // share of a group's candidates that get shadow rays (with
+                              // FEATURE_SHADOW_RESAMPLE; 1: all)
+    float shadow_cull;        // Russian roulette threshold on a candidate's luminance (with
+                              // FEATURE_SHADOW_CULL; 0: off)
+    uint control_variates;    // CONTROL_VARIATES_* (with FEATURE_CONTROL_VARIATES)
 };
 
 // Per-dispatch constants.
@@ -401,8 +415,10 @@ struct QueryRay {
     vec3 dir;
     float tmax;
     uint mask;
-    uint pad0;
-    uint pad1;
+    float shadow_resample;    // share of a group's candidates that get shadow rays (with
+                              // FEATURE_SHADOW_RESAMPLE; 1: all)
+    float shadow_cull;        // Russian roulette threshold on a candidate's luminance (with
+                              // FEATURE_SHADOW_CULL; 0: off)
     uint pad2;
 };
 

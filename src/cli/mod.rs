@@ -155,6 +155,18 @@ pub struct IntegratorArgs {
     /// (a linear scan over every light, as before the tree) or loop (every light at every point).
     #[arg(long, value_name = "KIND", default_value = "tree")]
     pub light_selection: crate::render::LightSelection,
+    /// Trace shadow rays for this share (0 to 1] of each group's light and BRDF samples, picked by
+    /// resampling on their unshadowed luminance, unbiased (TECHNIQUES.md 4.2); 1: all.
+    #[arg(long, value_name = "PCT", default_value_t = 1.0)]
+    pub shadow_resample: f32,
+    /// Russian roulette before each shadow ray: keep a sample with probability min(1, its
+    /// luminance / this), unbiased (TECHNIQUES.md 4.3); 0: off.
+    #[arg(long, value_name = "T", default_value_t = 0.0)]
+    pub shadow_cull: f32,
+    /// Control variates for diffuse light samples of rect, disk and sphere lights: off, avgvis
+    /// (the course's average visibility: biased, consistent) or loo (leave one out: unbiased).
+    #[arg(long, value_name = "MODE", default_value = "off")]
+    pub control_variates: crate::render::ControlVariates,
 }
 
 impl IntegratorArgs {
@@ -184,6 +196,9 @@ impl IntegratorArgs {
             brdf_samples: self.brdf_samples,
             diffuse_mis: self.diffuse_mis,
             light_selection: self.light_selection,
+            shadow_resample: self.shadow_resample,
+            shadow_cull: self.shadow_cull,
+            control_variates: self.control_variates,
         }
     }
 }
@@ -231,6 +246,15 @@ pub fn image_metadata(
         ("illum.lightSamples".into(), it.light_samples.to_string()),
         ("illum.brdfSamples".into(), it.brdf_samples.to_string()),
         ("illum.diffuseMIS".into(), it.diffuse_mis.to_string()),
+        (
+            "illum.shadowResample".into(),
+            it.shadow_resample.to_string(),
+        ),
+        ("illum.shadowCull".into(), it.shadow_cull.to_string()),
+        (
+            "illum.controlVariates".into(),
+            it.control_variates.name().into(),
+        ),
         (
             "illum.nonFiniteSamples".into(),
             s.non_finite_samples.to_string(),

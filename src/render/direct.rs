@@ -3,7 +3,7 @@
 //! Lighting at Pixar" does (TECHNIQUES.md §3).
 
 use super::integrator::{Integrator, IntegratorPasses};
-use super::{IntegratorSettings, LightSelection, PreparedScene, Technique};
+use super::{ControlVariates, IntegratorSettings, LightSelection, PreparedScene, Technique};
 use crate::error::Result;
 use crate::layout::*;
 use crate::shaders;
@@ -15,10 +15,11 @@ pub struct PrimaryKernel {
 }
 
 impl PrimaryKernel {
-    pub fn new(ctx: &Context, scene: &PreparedScene) -> Result<PrimaryKernel> {
+    pub fn new(ctx: &Context, scene: &PreparedScene, features: u32) -> Result<PrimaryKernel> {
         let pipeline = film_pipeline(
             ctx,
             scene,
+            features,
             "primary",
             (shaders::PRIMARY_RQ, shaders::PRIMARY_BVH),
             false,
@@ -40,7 +41,15 @@ impl Integrator for Direct {
     }
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
-        Ok(Box::new(PrimaryKernel::new(ctx, scene)?))
+        Ok(Box::new(PrimaryKernel::new(
+            ctx,
+            scene,
+            self.0.kernel_features(),
+        )?))
+    }
+
+    fn features(&self) -> u32 {
+        self.0.kernel_features()
     }
 }
 
@@ -68,6 +77,13 @@ pub fn configure_direct(it: &IntegratorSettings, frame: &mut Frame) {
     } else {
         0
     };
+    frame.shadow_resample = it.shadow_resample;
+    frame.shadow_cull = it.shadow_cull;
+    frame.control_variates = match it.control_variates {
+        ControlVariates::Off => 0,
+        ControlVariates::AvgVis => CONTROL_VARIATES_AVGVIS,
+        ControlVariates::Loo => CONTROL_VARIATES_LOO,
+    };
     // Without finite lights there is no tree: the (infinite) lights are looped over.
     frame.light_select = match it.light_selection {
         LightSelection::Tree if frame.light_tree != 0 => LIGHT_SELECT_TREE,
@@ -77,10 +93,11 @@ pub fn configure_direct(it: &IntegratorSettings, frame: &mut Frame) {
 }
 
 /// A kernel over film pixels (frame constants, film, the AOV planes if `aovs`, the trace
-/// structure), with the scene's feature switches.
+/// structure), with the scene's feature switches and `features` (the settings' own).
 pub fn film_pipeline(
     ctx: &Context,
     scene: &PreparedScene,
+    features: u32,
     name: &str,
     (rq, bvh): (&'static [u8], &'static [u8]),
     aovs: bool,
@@ -99,7 +116,7 @@ pub fn film_pipeline(
         scene.trace.select(rq, bvh),
         &bindings,
         std::mem::size_of::<PassConstants>() as u32,
-        &[scene.gpu.features],
+        &[scene.gpu.features | features],
     )?;
     scene.trace.bind(&pipeline);
     Ok(pipeline)

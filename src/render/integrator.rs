@@ -20,6 +20,11 @@ pub trait Integrator {
     }
     /// Writes its settings into the frame constants.
     fn configure(&self, frame: &mut Frame);
+    /// Feature bits its settings add to the scene's (FEATURE_SHADOW_*); a prepared scene keeps
+    /// kernels per name and these bits.
+    fn features(&self) -> u32 {
+        0
+    }
     /// Creates its kernels (and the buffers they own) for `scene`.
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>>;
 }

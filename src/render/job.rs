@@ -24,13 +24,16 @@ pub fn settings_text(s: &RenderSettings) -> String {
         ),
     };
     format!(
-        "integrator={} {integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} clamp={} nan_every={}",
+        "integrator={} {integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} shadow_resample={} shadow_cull={} control_variates={} clamp={} nan_every={}",
         it.kind.name(),
         it.technique.name(),
         it.light_samples,
         it.brdf_samples,
         it.diffuse_mis,
         it.light_selection.name(),
+        it.shadow_resample,
+        it.shadow_cull,
+        it.control_variates.name(),
         s.clamp.map_or("off".into(), |c| c.to_string()),
         s.inject_non_finite
     )

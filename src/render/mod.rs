@@ -21,7 +21,9 @@ use film::FILM_BLOCK;
 pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
 pub use session::{ImageState, Pass, RenderSession, TargetImage};
-pub use settings::{IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique};
+pub use settings::{
+    ControlVariates, IntegratorKind, IntegratorSettings, LightSelection, RenderSettings, Technique,
+};
 
 use crate::error::{Error, Result};
 use crate::layout::*;
@@ -208,7 +210,7 @@ impl Renderer {
         let mut frame_constants = gpu.frame;
         crate::gpu_scene::set_camera(&mut frame_constants, camera, gpu.origin);
         let integrator = integrator::select(settings);
-        let kernel = match prepared.take_kernels(integrator.name()) {
+        let kernel = match prepared.take_kernels(integrator.name(), integrator.features()) {
             Some(k) => k,
             None => integrator.kernels(ctx, prepared)?,
         };
@@ -459,7 +461,7 @@ impl Renderer {
                 break;
             }
         }
-        prepared.keep_kernels(integrator.name(), kernel);
+        prepared.keep_kernels(integrator.name(), integrator.features(), kernel);
         Ok(outputs)
     }
 }

@@ -23,20 +23,36 @@ pub struct PreparedScene {
     pub max_albedo: f32,
     /// Diagonal of the scene's geometry bounds (scene units): the scale of cache cells.
     pub extent: f32,
-    /// Kernels of the integrators that rendered it, by name: pipelines are created once.
-    kernels: RefCell<Vec<(&'static str, Box<dyn IntegratorPasses>)>>,
+    /// Kernels of the integrators that rendered it, by name and the settings' feature bits
+    /// (Integrator::features): pipelines are created once.
+    kernels: RefCell<Vec<KeptKernels>>,
 }
 
+/// An integrator's kernels kept by a prepared scene: (name, feature bits, kernels).
+type KeptKernels = (&'static str, u32, Box<dyn IntegratorPasses>);
+
 impl PreparedScene {
-    /// The kernels of integrator `name` created by an earlier render, if any.
-    pub(super) fn take_kernels(&self, name: &str) -> Option<Box<dyn IntegratorPasses>> {
+    /// The kernels of integrator `name` with feature bits `features` created by an earlier
+    /// render, if any.
+    pub(super) fn take_kernels(
+        &self,
+        name: &str,
+        features: u32,
+    ) -> Option<Box<dyn IntegratorPasses>> {
         let mut k = self.kernels.borrow_mut();
-        let at = k.iter().position(|(n, _)| *n == name)?;
-        Some(k.swap_remove(at).1)
+        let at = k
+            .iter()
+            .position(|(n, f, _)| *n == name && *f == features)?;
+        Some(k.swap_remove(at).2)
     }
 
-    pub(super) fn keep_kernels(&self, name: &'static str, kernels: Box<dyn IntegratorPasses>) {
-        self.kernels.borrow_mut().push((name, kernels));
+    pub(super) fn keep_kernels(
+        &self,
+        name: &'static str,
+        features: u32,
+        kernels: Box<dyn IntegratorPasses>,
+    ) {
+        self.kernels.borrow_mut().push((name, features, kernels));
     }
 
     /// Brings the prepared scene to `scene`, an edit of the one it was prepared from, without

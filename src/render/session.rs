@@ -74,6 +74,8 @@ pub struct RenderSession<'p> {
     prepared: &'p mut PreparedScene,
     settings: RenderSettings,
     integrator: &'static str,
+    /// The settings' kernel feature bits (Integrator::features).
+    features: u32,
     kernels: Option<Box<dyn IntegratorPasses>>,
     resolve: ComputePipeline,
     frame: Buffer,
@@ -122,7 +124,7 @@ impl Renderer {
             )));
         }
         // The prepared scene's kernels if an earlier render left them, given back on drop.
-        let kernels = match prepared.take_kernels(integrator.name()) {
+        let kernels = match prepared.take_kernels(integrator.name(), integrator.features()) {
             Some(k) => k,
             None => integrator.kernels(&ctx, prepared)?,
         };
@@ -146,6 +148,7 @@ impl Renderer {
             prepared,
             settings: settings.clone(),
             integrator: integrator.name(),
+            features: integrator.features(),
             kernels: Some(kernels),
             resolve,
             frame,
@@ -281,7 +284,8 @@ impl RenderSession<'_> {
 impl Drop for RenderSession<'_> {
     fn drop(&mut self) {
         if let Some(k) = self.kernels.take() {
-            self.prepared.keep_kernels(self.integrator, k);
+            self.prepared
+                .keep_kernels(self.integrator, self.features, k);
         }
     }
 }

@@ -117,6 +117,43 @@ impl std::str::FromStr for LightSelection {
     }
 }
 
+/// Control variates for the diffuse light samples of rect, disk and sphere lights (TECHNIQUES.md
+/// §5, glsl/shared/direct.glsl): the analytic unshadowed irradiance scaled by a visibility
+/// estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ControlVariates {
+    #[default]
+    Off,
+    /// The course's average visibility: biased (−Cov/N), consistent.
+    AvgVis,
+    /// Leave-one-out average visibility: unbiased.
+    Loo,
+}
+
+impl ControlVariates {
+    pub fn name(self) -> &'static str {
+        match self {
+            ControlVariates::Off => "off",
+            ControlVariates::AvgVis => "avgvis",
+            ControlVariates::Loo => "loo",
+        }
+    }
+}
+
+impl std::str::FromStr for ControlVariates {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "off" => Ok(ControlVariates::Off),
+            "avgvis" => Ok(ControlVariates::AvgVis),
+            "loo" => Ok(ControlVariates::Loo),
+            _ => Err(format!(
+                "unknown control variates {s:?} (expected off, avgvis or loo)"
+            )),
+        }
+    }
+}
+
 /// The integrator and its sample counts and switches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntegratorSettings {
@@ -139,6 +176,32 @@ pub struct IntegratorSettings {
     pub diffuse_mis: bool,
     /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
     pub light_selection: LightSelection,
+    /// Share of each group's shadow-ray candidates that get shadow rays, picked by systematic
+    /// resampling on their unshadowed luminance (TECHNIQUES.md §4.2); 1: all, as without it.
+    pub shadow_resample: f32,
+    /// Russian roulette on each candidate before its shadow ray: kept with probability
+    /// min(1, luminance / this), then divided by it (TECHNIQUES.md §4.3); 0: off.
+    pub shadow_cull: f32,
+    /// Control variates for diffuse light samples (off: none).
+    pub control_variates: ControlVariates,
+}
+
+impl IntegratorSettings {
+    /// The feature bits these settings add to the scene's in every kernel that lights with
+    /// direct_lighting (code for what is off is left out).
+    pub fn kernel_features(&self) -> u32 {
+        let mut f = 0;
+        if self.shadow_resample < 1.0 {
+            f |= crate::layout::FEATURE_SHADOW_RESAMPLE;
+        }
+        if self.shadow_cull > 0.0 {
+            f |= crate::layout::FEATURE_SHADOW_CULL;
+        }
+        if self.control_variates != ControlVariates::Off {
+            f |= crate::layout::FEATURE_CONTROL_VARIATES;
+        }
+        f
+    }
 }
 
 impl Default for IntegratorSettings {
@@ -153,6 +216,9 @@ impl Default for IntegratorSettings {
             brdf_samples: 2,
             diffuse_mis: false,
             light_selection: LightSelection::Tree,
+            shadow_resample: 1.0,
+            shadow_cull: 0.0,
+            control_variates: ControlVariates::Off,
         }
     }
 }
@@ -227,6 +293,27 @@ impl RenderSettings {
                 "light and BRDF sample counts must be in 1..=64, got {} and {}",
                 it.light_samples, it.brdf_samples
             )));
+        }
+        if !(it.shadow_resample > 0.0 && it.shadow_resample <= 1.0) {
+            return Err(Error::Invalid(format!(
+                "the shadow resample share must be in (0, 1], got {}",
+                it.shadow_resample
+            )));
+        }
+        if !(it.shadow_cull >= 0.0 && it.shadow_cull.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "the shadow cull threshold must be finite and at least 0, got {}",
+                it.shadow_cull
+            )));
+        }
+        if it.control_variates != ControlVariates::Off
+            && (it.shadow_resample < 1.0 || it.shadow_cull > 0.0)
+        {
+            return Err(Error::Invalid(
+                "control variates need every light sample's shadow ray: they do not combine \
+                 with --shadow-resample or --shadow-cull"
+                    .into(),
+            ));
         }
         if it.max_depth == 0 || it.max_depth < -1 {
             return Err(Error::Invalid(format!(

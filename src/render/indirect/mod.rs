@@ -44,10 +44,15 @@ impl Integrator for Path {
         frame.diffuse_spread = DIFFUSE_SPREAD;
     }
 
+    fn features(&self) -> u32 {
+        self.0.kernel_features()
+    }
+
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
         Ok(Box::new(FilmKernel(film_pipeline(
             ctx,
             scene,
+            self.0.kernel_features(),
             "path",
             (shaders::PATH_RQ, shaders::PATH_BVH),
             true,
@@ -85,10 +90,15 @@ impl Integrator for Full {
         frame.diffuse_spread = DIFFUSE_SPREAD;
     }
 
+    fn features(&self) -> u32 {
+        self.0.kernel_features()
+    }
+
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
         let film = film_pipeline(
             ctx,
             scene,
+            self.0.kernel_features(),
             "full",
             (shaders::FULL_RQ, shaders::FULL_BVH),
             true,

@@ -1,0 +1,242 @@
+//! Control variates (glsl/shared/direct.glsl, TECHNIQUES.md §5): `avgvis` and `loo`.
+//!
+//! * Zero variance: a diffuse plane fully lit by a huge rect, disk or sphere light. Each light
+//!   sample's diffuse term then has the analytic sum G = rho L E/(pi L), which the control adds
+//!   for every sample, so every camera sample equals G(p) exactly. The lights are so large that
+//!   G varies by less than 1e-4 over the view, and E/(pi L) below the centre is known in closed
+//!   form (rect: corner form factors; disk: R^2/(h^2+R^2); sphere: sin^2 sigma): each pixel equals
+//!   rho L E/(pi L) to that precision for every seed, while the plain estimator's pixels scatter.
+//!   The plain estimator's mean matches it too (G is the integral of what g samples).
+//! * Unbiased (loo): block means of independent renders against the plain estimator on a
+//!   penumbra, Welch t-tests with variances from the renders' scatter, Šidák over the blocks.
+
+mod common;
+use common::*;
+use illum::render::{
+    ControlVariates, IntegratorSettings, RenderOutput, RenderSettings, Renderer, Technique,
+};
+
+const W: u32 = 24;
+const H: u32 = 16;
+const ALBEDO: f64 = 0.5;
+const RADIANCE: f64 = 2.0;
+
+fn settings(cv: ControlVariates, spp: u32) -> RenderSettings {
+    RenderSettings {
+        spp,
+        trace: trace_mode(),
+        integrator: IntegratorSettings {
+            technique: Technique::Mis,
+            light_samples: 4,
+            control_variates: cv,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+fn scene_json(light: &str, occluder: bool) -> String {
+    let sphere = if occluder {
+        r#", "ball": {"sphere": {"center": [0.35, 0.5, 0], "radius": 0.25}, "material": "m"}"#
+    } else {
+        ""
+    };
+    format!(
+        r#"{{"camera": {{"position": [0, 0.3, 0], "look_at": [0, 0, 0], "up": [0, 0, 1], "fov_y": 60, "resolution": [{W}, {H}]}},
+        "materials": {{"m": {{"diffuse": [{ALBEDO}, {ALBEDO}, {ALBEDO}]}}}},
+        "shapes": {{"floor": {{"rect": {{"center": [0, 0, 0], "normal": [0, 1, 0], "size": [40, 40]}}, "material": "m"}}{sphere}}},
+        "lights": {{"key": {{{light}, "color": [{RADIANCE}, {RADIANCE}, {RADIANCE}], "intensity": 1}}}}}}"#
+    )
+}
+
+fn lum(p: [f32; 3]) -> f64 {
+    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+}
+
+fn render(renderer: &Renderer, json: &str, s: &RenderSettings, seeds: &[u64]) -> Vec<RenderOutput> {
+    renderer
+        .render_seeds(&scene(json), s, seeds, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("render failed: {e}"))
+}
+
+#[test]
+fn fully_lit_plane_has_zero_variance() {
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    // E / (pi L) straight below the centre: a rect's four corner form factors, a disk's
+    // R^2 / (h^2 + R^2), a sphere's sin^2(sigma); then how far a pixel may be from it. Over the
+    // view (up to rho = 0.31 from the centre) the rect's and disk's change by less than 1e-5; the
+    // sphere's, sin^2(sigma) cos(theta) = d0^2 / (d0^2 + rho^2) cos(theta), by up to
+    // 1.5 rho^2 / d0^2 = 3.3e-4 (d0 = 21).
+    let corner = |a: f64, b: f64| {
+        let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+        (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * std::f64::consts::PI)
+    };
+    let cases = [
+        (
+            "rect",
+            r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [40, 40]}"#.to_string(),
+            4.0 * corner(20.0, 20.0),
+            1e-4,
+        ),
+        (
+            "disk",
+            r#""disk": {"center": [0, 1, 0], "normal": [0, -1, 0], "radius": 20}"#.to_string(),
+            400.0 / 401.0,
+            1e-4,
+        ),
+        (
+            "sphere",
+            r#""sphere": {"center": [0, 21, 0], "radius": 20}"#.to_string(),
+            (20.0f64 / 21.0).powi(2),
+            4e-4,
+        ),
+    ];
+    for (name, light, share, tolerance) in cases {
+        let json = scene_json(&light, false);
+        let expected = ALBEDO * RADIANCE * share;
+        let plain = render(
+            &renderer,
+            &json,
+            &settings(ControlVariates::Off, 2),
+            &[1, 2],
+        );
+        for cv in [ControlVariates::AvgVis, ControlVariates::Loo] {
+            let outs = render(&renderer, &json, &settings(cv, 2), &[3, 4]);
+            let mut worst = 0.0f64;
+            for o in &outs {
+                for p in &o.film.beauty {
+                    worst = worst.max((lum(*p) / expected - 1.0).abs());
+                }
+            }
+            eprintln!(
+                "{name} {}: largest |pixel / expected - 1| = {worst:.2e}",
+                cv.name()
+            );
+            assert!(
+                worst < tolerance,
+                "{name} {}: a pixel is {worst:.2e} off rho L sin^2",
+                cv.name()
+            );
+        }
+        // The plain estimator on the same plane: unbiased, but its pixels scatter (the test
+        // above would fail for it).
+        // Its mean, with the standard error from the scatter of its (independent) pixels.
+        let xs: Vec<f64> = plain
+            .iter()
+            .flat_map(|o| o.film.beauty.iter().map(|p| lum(*p)))
+            .collect();
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let se = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        let worst = xs
+            .iter()
+            .map(|x| (x / expected - 1.0).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{name} plain: largest |pixel / expected - 1| = {worst:.2e}, mean {mean:.5} ± {se:.5} vs {expected:.5}"
+        );
+        assert!(worst > 1e-2, "{name}: the plain estimator should scatter");
+        assert!(
+            (mean - expected).abs() <= 5.0 * se,
+            "{name}: plain mean {mean} ± {se} vs {expected}"
+        );
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// Per seed: the luminance means of the 4x4 blocks, then the image's.
+fn block_means(out: &RenderOutput) -> Vec<f64> {
+    let (bw, bh) = (W / 4, H / 4);
+    let mut v = vec![0.0; (bw * bh) as usize + 1];
+    for y in 0..H {
+        for x in 0..W {
+            let l = lum(out.film.beauty[(y * W + x) as usize]);
+            v[((y / 4) * bw + x / 4) as usize] += l / 16.0;
+            v[(bw * bh) as usize] += l / f64::from(W * H);
+        }
+    }
+    v
+}
+
+fn stats(outs: &[RenderOutput]) -> Vec<(f64, f64)> {
+    let per: Vec<Vec<f64>> = outs.iter().map(block_means).collect();
+    let k = per.len() as f64;
+    (0..per[0].len())
+        .map(|b| {
+            let m = per.iter().map(|p| p[b]).sum::<f64>() / k;
+            let var = per.iter().map(|p| (p[b] - m).powi(2)).sum::<f64>() / (k - 1.0);
+            (m, var / k)
+        })
+        .collect()
+}
+
+#[test]
+fn leave_one_out_is_unbiased_in_a_penumbra() {
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    let json = scene_json(
+        r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [8, 8]}"#,
+        true,
+    );
+    let seeds = |base: u64| (0..16).map(|j| base * 64 + j).collect::<Vec<u64>>();
+    let plain = stats(&render(
+        &renderer,
+        &json,
+        &settings(ControlVariates::Off, 4),
+        &seeds(1),
+    ));
+    let loo = stats(&render(
+        &renderer,
+        &json,
+        &settings(ControlVariates::Loo, 4),
+        &seeds(2),
+    ));
+    let per = 1.0 - (1.0 - 1e-3f64).powf(1.0 / loo.len() as f64);
+    let (mut vp, mut vl) = (0.0, 0.0);
+    for (b, (&(m1, v1), &(m0, v0))) in loo.iter().zip(&plain).enumerate() {
+        let t = t_for(per, welch_dof(&[(v1, 15.0), (v0, 15.0)]));
+        let se = (v1 + v0).sqrt();
+        vp += v0;
+        vl += v1;
+        assert!(
+            (m1 - m0).abs() <= t * se,
+            "loo: block {b}: {m1} vs plain {m0} (t = {:.2}, limit {t:.2})",
+            (m1 - m0) / se
+        );
+    }
+    eprintln!("variance of the block means: loo / plain = {:.3}", vl / vp);
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn fully_shadowed_plane_is_black() {
+    // A 40x40 opaque sheet between the camera (below it) and the 8x8 rect light: every shadow ray
+    // of every floor point is blocked, so the visibility estimate is 0 and so is the control's
+    // term: the pixels are exactly 0, for both forms (without the visibility factor, the control
+    // would add G).
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    let json = scene_json(
+        r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [8, 8]}"#,
+        false,
+    )
+    .replace(
+        r#""material": "m"}}"#,
+        r#""material": "m"}, "sheet": {"rect": {"center": [0, 0.5, 0], "normal": [0, -1, 0], "size": [40, 40]}, "material": "m"}}"#,
+    );
+    assert!(json.contains("sheet"));
+    for cv in [ControlVariates::AvgVis, ControlVariates::Loo] {
+        let outs = render(&renderer, &json, &settings(cv, 2), &[5, 6]);
+        for o in &outs {
+            for p in &o.film.beauty {
+                assert_eq!(*p, [0.0; 3], "{}: a shadowed pixel is lit", cv.name());
+            }
+            assert!(
+                o.stats.rays > u64::from(W * H * 2),
+                "shadow rays were traced"
+            );
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}
