@@ -32,7 +32,8 @@
 //   angle differences; the same float32 pitfalls as the rect's angle sum); MIS with BRDF samples
 //   covers the near/grazing configurations where area sampling is noisy.
 // * dome: piecewise-constant sampling of the map's cells (2.4; glsl/shared/dome_map.glsl) with the
-//   marginal/conditional CDFs of GpuDomeSampling, then a uniform position inside the cell:
+//   marginal/conditional CDFs of GpuDomeSampling (searched from guide tables), then a uniform
+//   position inside the cell:
 //   pdf = P(row) P(cell | row) W H / (dω / du dv), 2 pi^2 sin(theta) for lat-long maps, 4 pi for
 //   the equal-area square. Probabilities are differences of the stored float CDFs, which is
 //   exactly the mass the binary search gives each cell. Without a table (width == 0) the dome is
@@ -50,6 +51,7 @@
 #include "dome_map.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeCdfRef { float v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeGuideRef { uvec2 v[]; };
 
 struct LightSample {
     vec3 wi;      // unit direction from p toward the light
@@ -426,9 +428,12 @@ LightHit triangle_hit(GpuLight l, vec3 p, vec3 w) {
 // Dome
 
 // Index i with cdf[i] <= u < cdf[i + 1] among n intervals (cdf[0] = 0, cdf[n] = 1, non-decreasing);
-// only intervals of positive width can be returned for u in [0, 1).
-uint cdf_find(DomeCdfRef cdf, uint base, uint n, float u) {
-    uint lo = 0u, hi = n;   // invariant: cdf[lo] <= u < cdf[hi] (cdf[n] = 1 > u)
+// only intervals of positive width can be returned for u in [0, 1). The guide (one uvec2 per bucket
+// of width 1/n in u, src/gpu_scene/dome.rs) bounds the binary search to the few intervals that
+// bucket can reach: it returns the same index as a search over all n, in O(1) expected steps.
+uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n, float u) {
+    uvec2 r = guide.v[gbase + min(uint(u * float(n)), n - 1u)];
+    uint lo = r.x, hi = r.y;   // invariant: cdf[lo] <= u < cdf[hi] (cdf[n] = 1 > u)
     while (hi - lo > 1u) {
         uint mid = (lo + hi) >> 1u;
         if (cdf.v[base + mid] <= u) lo = mid; else hi = mid;
@@ -451,10 +456,12 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
     float uy = min(u.y, 0.99999994);
     DomeCdfRef marg = DomeCdfRef(ds.marginal);
     DomeCdfRef cond = DomeCdfRef(ds.conditional);
-    uint j = cdf_find(marg, 0u, H, ux);
+    // The guides follow the conditional CDFs: H buckets of the marginal, then W per row.
+    DomeGuideRef guide = DomeGuideRef(ds.conditional + 4ul * uint64_t(H * (W + 1u)));
+    uint j = cdf_find(marg, 0u, guide, 0u, H, ux);
     float m0 = marg.v[j], m1 = marg.v[j + 1u];
     uint base = j * (W + 1u);
-    uint i = cdf_find(cond, base, W, uy);
+    uint i = cdf_find(cond, base, guide, H + j * W, W, uy);
     float c0 = cond.v[base + i], c1 = cond.v[base + i + 1u];
     float pm = m1 - m0, pc = c1 - c0;
     if (!(pm > 0.0) || !(pc > 0.0)) return s;

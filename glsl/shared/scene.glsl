@@ -38,8 +38,11 @@ GpuTexture get_texture(uint i) { return TextureRef(frame.textures).v[i]; }
 int wrap_texel(int i, int n, uint mode) {
     if (mode == TEXTURE_WRAP_CLAMP) return clamp(i, 0, n - 1);
     int m = mode == TEXTURE_WRAP_MIRROR ? 2 * n : n;
-    int p = i % m;
+    // i mod m by a float quotient (CPU drivers have no vector integer division), corrected to be
+    // exact: the quotient is off by at most one for the indices textures have (|i| < 2^22).
+    int p = i - m * int(floor(float(i) / float(m)));
     if (p < 0) p += m;
+    if (p >= m) p -= m;
     return p < n ? p : m - 1 - p;
 }
 
@@ -57,8 +60,13 @@ vec4 texture_at(GpuTexture t, vec2 st, bool nearest, uvec2 wrap) {
     vec2 c = st - 0.5;
     vec2 f = c - floor(c);
     ivec2 i0 = ivec2(floor(c));
-    return mix(mix(texel_at(t, i0, wrap), texel_at(t, i0 + ivec2(1, 0), wrap), f.x),
-               mix(texel_at(t, i0 + ivec2(0, 1), wrap), texel_at(t, i0 + ivec2(1, 1), wrap), f.x), f.y);
+    // Each row and column wrapped once (not once per texel).
+    int x0 = wrap_texel(i0.x, int(t.width), wrap.x), x1 = wrap_texel(i0.x + 1, int(t.width), wrap.x);
+    uint r0 = t.offset + uint(wrap_texel(i0.y, int(t.height), wrap.y)) * t.width;
+    uint r1 = t.offset + uint(wrap_texel(i0.y + 1, int(t.height), wrap.y)) * t.width;
+    TexelRef texels = TexelRef(frame.texels);
+    return mix(mix(texels.v[r0 + uint(x0)], texels.v[r0 + uint(x1)], f.x),
+               mix(texels.v[r1 + uint(x0)], texels.v[r1 + uint(x1)], f.x), f.y);
 }
 
 // Brings a coordinate into a range its wrap mode maps the same way, so that the integer texel

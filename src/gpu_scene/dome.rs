@@ -18,7 +18,10 @@
 //!
 //! The tables are a marginal CDF over rows and one conditional CDF per row, accumulated in f64 and
 //! stored as f32 with exact 0 and 1 ends. The GPU samples a row and a cell by binary search and a
-//! uniform point inside the cell; its pdf is `P(row) P(cell | row) W H / (dω/du dv)` with the
+//! uniform point inside the cell. Each CDF of n intervals has a guide of n buckets: bucket k holds
+//! the index range `[lo, hi)` of the intervals that u in [k/n, (k+1)/n) (widened by 1e-6, more than
+//! the GPU's rounding of `u n`) can fall in, so the search runs over a few intervals instead of n
+//! (issue 15: O(1) expected steps) and still returns the index of the full search; its pdf is `P(row) P(cell | row) W H / (dω/du dv)` with the
 //! probabilities taken as differences of the stored CDFs — exactly the mass the search assigns.
 
 use crate::layout::GpuDomeSampling;
@@ -36,6 +39,9 @@ pub struct DomeTable {
     pub conditional: Vec<f32>,
     /// Mean texel weight (before normalisation).
     pub integral: f64,
+    /// Search guides: `height` buckets of the marginal, then `width` per row of the conditionals,
+    /// each the `[lo, hi)` range of intervals a sample in that bucket can fall in.
+    pub guides: Vec<[u32; 2]>,
 }
 
 /// Luminance weights of linear RGB (Rec. 709), as `luminance()` in glsl/shared/common.glsl.
@@ -119,7 +125,12 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     }
     let grand: f64 = row_sums.iter().sum();
     let marginal = cdf(&row_sums, grand);
+    let mut guides = guide(&marginal);
+    for row in conditional.chunks(w + 1) {
+        guides.extend(guide(row));
+    }
     DomeTable {
+        guides,
         width: w as u32,
         height: h as u32,
         marginal,
@@ -147,12 +158,36 @@ fn cdf(weights: &[f64], sum: f64) -> Vec<f32> {
     out
 }
 
+/// Search guide of a CDF of n intervals (n + 1 entries, see `cdf`): for bucket k of u in
+/// [k/n, (k+1)/n), widened by `GUIDE_MARGIN` on both sides, the range `[lo, hi)` of the index i
+/// with `cdf[i] <= u < cdf[i + 1]` (the GPU's `cdf_find`; monotone in u, so the ends suffice).
+fn guide(cdf: &[f32]) -> Vec<[u32; 2]> {
+    const GUIDE_MARGIN: f64 = 1e-6;
+    const U_MAX: f32 = 0.999_999_94; // the GPU clamps u to this
+    let n = cdf.len() - 1;
+    let index = |x: f64| {
+        let x = (x.max(0.0) as f32).min(U_MAX);
+        cdf[..n].partition_point(|&c| c <= x).max(1) - 1
+    };
+    (0..n)
+        .map(|k| {
+            let lo = index(k as f64 / n as f64 - GUIDE_MARGIN);
+            let hi = index((k + 1) as f64 / n as f64 + GUIDE_MARGIN) + 1;
+            [lo as u32, hi as u32]
+        })
+        .collect()
+}
+
 impl DomeTable {
-    /// The data to upload as one buffer: the marginal CDF, then the conditional CDFs.
+    /// The data to upload as one buffer: the marginal CDF, the conditional CDFs, then the guides
+    /// (as u32 bit patterns).
     pub fn data(&self) -> Vec<f32> {
-        let mut v = Vec::with_capacity(self.marginal.len() + self.conditional.len());
+        let mut v = Vec::with_capacity(
+            self.marginal.len() + self.conditional.len() + 2 * self.guides.len(),
+        );
         v.extend_from_slice(&self.marginal);
         v.extend_from_slice(&self.conditional);
+        v.extend(self.guides.iter().flatten().map(|&g| f32::from_bits(g)));
         v
     }
 
@@ -216,5 +251,48 @@ mod tests {
         );
         assert_eq!(t.marginal, vec![0.0, 0.5, 1.0]);
         assert!((t.texel_probability(2, 1) - 0.125).abs() < 1e-7);
+    }
+
+    #[test]
+    fn guides_bracket_the_full_search() {
+        // A peaked map with empty rows and cells: every u's full-search index lies in its bucket.
+        let (w, h) = (16u32, 8u32);
+        let texels = (0..w * h)
+            .map(|k| {
+                let (i, j) = (k % w, k / w);
+                let v = if j == 3 {
+                    0.0
+                } else if i == 5 && j == 2 {
+                    1e5
+                } else {
+                    (i % 3) as f32
+                };
+                Vec4::new(v, v, v, 1.0)
+            })
+            .collect();
+        let t = build(
+            &Texture::new("peak", w, h, texels),
+            Vec3::ONE,
+            DomeConvention::Illum,
+        );
+        let check = |cdf: &[f32], guides: &[[u32; 2]]| {
+            let n = cdf.len() - 1;
+            for s in 0..=100_000u32 {
+                let u = (s as f32 / 100_000.0).min(0.999_999_94);
+                let full = cdf[..n].partition_point(|&c| c <= u) - 1;
+                let [lo, hi] = guides[((u * n as f32) as usize).min(n - 1)];
+                assert!(
+                    lo as usize <= full && full < hi as usize,
+                    "u {u}: {full} not in [{lo}, {hi})"
+                );
+                assert!(cdf[lo as usize] <= u && u < cdf[hi as usize]);
+            }
+        };
+        check(&t.marginal, &t.guides[..h as usize]);
+        for j in 0..h as usize {
+            let row = &t.conditional[j * (w as usize + 1)..(j + 1) * (w as usize + 1)];
+            let g0 = h as usize + j * w as usize;
+            check(row, &t.guides[g0..g0 + w as usize]);
+        }
     }
 }
