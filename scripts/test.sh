@@ -11,6 +11,9 @@ cargo clippy --release --all-targets -- -D warnings
 scripts/test-k8s.sh
 
 echo "== Mesa 25 lavapipe (bookworm-backports), trace path auto"
+# The lib's staticlib (libillum.a), which tests/capi.rs links a C program against: `cargo test`
+# builds only the rlib. The same compilation serves the tests.
+cargo build --release --lib
 cargo test --release
 
 echo "== Slurm: one render in 4 parts on a single-node cluster, a task killed and resubmitted"

@@ -12,7 +12,12 @@ fn the_c_program_builds_against_the_header_and_passes() {
     let exe = std::env::current_exe().unwrap();
     let profile = exe.parent().and_then(Path::parent).unwrap();
     let lib = profile.join("libillum.a");
-    assert!(lib.exists(), "{} is missing", lib.display());
+    assert!(
+        lib.exists(),
+        "{} is missing: `cargo test` does not link the staticlib; run `cargo build --release --lib` \
+         first (scripts/test.sh does)",
+        lib.display()
+    );
     let dir = std::env::temp_dir().join(format!("illum-capi-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let program = dir.join("embed_test");
