@@ -24,5 +24,19 @@ ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --tes
 ILLUM_TEST_TRACE=bvh cargo test --release --test render --test direct --test report --test cli
 
 echo "== Debian's stock Mesa 22.3.6 lavapipe: no VK_KHR_ray_query, so the compute BVH"
+# Everything that can differ on this driver (the compute BVH, one sample per dispatch, no
+# ray-query device features, older LLVM). Left out, for CI time: the estimator-only statistics
+# of shadow_rays.rs and control_variates.rs and the cache-against-brute-force comparison of
+# indirect.rs (no trace-path or driver code of their own; they run on Mesa 25 above). The
+# indirect tests that do run here cover the cache's determinism and the furnace.
 stock="$PWD/.vk/mesa-stock/icd.json"
-VK_DRIVER_FILES="$stock" VK_ICD_FILENAMES="$stock" cargo test --release
+tests=()
+for t in tests/*.rs; do
+    name=$(basename "$t" .rs)
+    case "$name" in
+        shadow_rays | control_variates) ;;
+        *) tests+=(--test "$name") ;;
+    esac
+done
+VK_DRIVER_FILES="$stock" VK_ICD_FILENAMES="$stock" cargo test --release --lib --bins "${tests[@]}" \
+    -- --skip the_cache_agrees_with_brute_force

@@ -52,6 +52,8 @@ fn sigint_keeps_the_samples_done_so_far() {
     let child = illum()
         .args([
             "render",
+            "--integrator",
+            "direct",
             "-o",
             png.to_str().unwrap(),
             "--width",
@@ -86,6 +88,8 @@ fn sigint_keeps_the_samples_done_so_far() {
         let p = dir.join(format!("n{n}.exr"));
         let (code, err) = run(&[
             "render",
+            "--integrator",
+            "direct",
             "-o",
             p.to_str().unwrap(),
             "--width",
@@ -164,7 +168,7 @@ fn bad_output_paths_fail_before_rendering() {
     ];
     for (args, named, why) in cases {
         let start = Instant::now();
-        let mut all = vec!["render", "--spp", "1000000"];
+        let mut all = vec!["render", "--integrator", "direct", "--spp", "1000000"];
         all.extend(&args);
         let (code, err) = run(&all);
         let t = start.elapsed().as_secs_f64();
@@ -204,6 +208,8 @@ fn outputs_replace_files_whole_and_leave_no_temporaries() {
     let plot = dir.join("a-plot.png");
     let (code, err) = run(&[
         "render",
+        "--integrator",
+        "direct",
         "-o",
         exr.to_str().unwrap(),
         "--png",
@@ -235,6 +241,8 @@ fn first_compile_is_announced() {
         let mut c = illum();
         c.args([
             "render",
+            "--integrator",
+            "direct",
             "-o",
             out.to_str().unwrap(),
             "--spp",
@@ -264,6 +272,8 @@ fn failing_report_keeps_the_image() {
     let child = illum()
         .args([
             "render",
+            "--integrator",
+            "direct",
             "-o",
             exr.to_str().unwrap(),
             "--width",
