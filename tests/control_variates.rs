@@ -49,10 +49,6 @@ fn scene_json(light: &str, occluder: bool) -> String {
     )
 }
 
-fn lum(p: [f32; 3]) -> f64 {
-    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
-}
-
 fn render(renderer: &Renderer, json: &str, s: &RenderSettings, seeds: &[u64]) -> Vec<RenderOutput> {
     renderer
         .render_seeds(&scene(json), s, seeds, &mut |_, _| {})
@@ -106,7 +102,7 @@ fn fully_lit_plane_has_zero_variance() {
             let mut worst = 0.0f64;
             for o in &outs {
                 for p in &o.film.beauty {
-                    worst = worst.max((lum(*p) / expected - 1.0).abs());
+                    worst = worst.max((luminance(*p) / expected - 1.0).abs());
                 }
             }
             eprintln!(
@@ -124,7 +120,7 @@ fn fully_lit_plane_has_zero_variance() {
         // Its mean, with the standard error from the scatter of its (independent) pixels.
         let xs: Vec<f64> = plain
             .iter()
-            .flat_map(|o| o.film.beauty.iter().map(|p| lum(*p)))
+            .flat_map(|o| o.film.beauty.iter().map(|p| luminance(*p)))
             .collect();
         let n = xs.len() as f64;
         let mean = xs.iter().sum::<f64>() / n;
@@ -145,30 +141,9 @@ fn fully_lit_plane_has_zero_variance() {
     assert_no_validation_messages(&ctx);
 }
 
-/// Per seed: the luminance means of the 4x4 blocks, then the image's.
-fn block_means(out: &RenderOutput) -> Vec<f64> {
-    let (bw, bh) = (W / 4, H / 4);
-    let mut v = vec![0.0; (bw * bh) as usize + 1];
-    for y in 0..H {
-        for x in 0..W {
-            let l = lum(out.film.beauty[(y * W + x) as usize]);
-            v[((y / 4) * bw + x / 4) as usize] += l / 16.0;
-            v[(bw * bh) as usize] += l / f64::from(W * H);
-        }
-    }
-    v
-}
-
+/// Mean and variance of the mean over the seeds, per 4x4 block, then for the whole image.
 fn stats(outs: &[RenderOutput]) -> Vec<(f64, f64)> {
-    let per: Vec<Vec<f64>> = outs.iter().map(block_means).collect();
-    let k = per.len() as f64;
-    (0..per[0].len())
-        .map(|b| {
-            let m = per.iter().map(|p| p[b]).sum::<f64>() / k;
-            let var = per.iter().map(|p| (p[b] - m).powi(2)).sum::<f64>() / (k - 1.0);
-            (m, var / k)
-        })
-        .collect()
+    block_stats(outs, 4)
 }
 
 #[test]

@@ -47,38 +47,11 @@ fn plane<'a>(film: &'a Film, name: &str) -> &'a [[f32; 3]] {
         .rgb
 }
 
-fn luminance(c: [f32; 3]) -> f64 {
-    0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2])
-}
-
-/// Mean luminance of each block x block pixel block, per seed: [seed][block].
-fn block_means(outs: &[RenderOutput], block: u32) -> Vec<Vec<f64>> {
-    outs.iter()
-        .map(|o| {
-            let f = &o.film;
-            let (bx, by) = (f.width / block, f.height / block);
-            let mut m = vec![0.0; (bx * by) as usize];
-            for y in 0..by * block {
-                for x in 0..bx * block {
-                    m[((y / block) * bx + x / block) as usize] +=
-                        luminance(f.beauty[(y * f.width + x) as usize]);
-                }
-            }
-            m.iter().map(|v| v / f64::from(block * block)).collect()
-        })
-        .collect()
-}
-
-/// Mean over seeds and its standard error (from the seeds' scatter), per block.
-fn mean_and_error(per_seed: &[Vec<f64>]) -> Vec<(f64, f64)> {
-    let k = per_seed.len() as f64;
-    (0..per_seed[0].len())
-        .map(|b| {
-            let m = per_seed.iter().map(|s| s[b]).sum::<f64>() / k;
-            let var = per_seed.iter().map(|s| (s[b] - m).powi(2)).sum::<f64>() / (k - 1.0);
-            (m, (var / k).sqrt())
-        })
-        .collect()
+/// Mean luminance over the seeds and its standard error, per block x block pixel block.
+fn mean_and_error(outs: &[RenderOutput], block: u32) -> Vec<(f64, f64)> {
+    let mut s = block_stats(outs, block);
+    s.pop(); // the whole image
+    s.into_iter().map(|(m, v)| (m, v.sqrt())).collect()
 }
 
 /// A closed sphere of uniform emission Le = 1 and diffuse albedo rho, seen from inside: every
@@ -108,7 +81,7 @@ fn the_furnace_reads_le_over_one_minus_rho() {
             (IntegratorKind::Full, 1e-3 * indirect),
         ] {
             let outs = render_seeds(&ctx, &s, &settings(kind, 16), &seeds);
-            let (m, se) = mean_and_error(&block_means(&outs, 12))[0];
+            let (m, se) = mean_and_error(&outs, 12)[0];
             let limit = bias + t_for(1e-3 / 4.0, (seeds.len() - 1) as f64) * se;
             assert!(
                 (m - truth).abs() <= limit,
@@ -177,10 +150,7 @@ fn interior(diffuse_only: bool) -> Scene {
 /// Compares 6x6-pixel block means of two renders, each over several seeds: every block within
 /// `bias` (relative) plus Welch's t limit from the seeds' scatter, family-wise level 1e-3.
 fn assert_blocks_agree(a: &[RenderOutput], b: &[RenderOutput], bias: f64, what: &str) {
-    let (ma, mb) = (
-        mean_and_error(&block_means(a, 6)),
-        mean_and_error(&block_means(b, 6)),
-    );
+    let (ma, mb) = (mean_and_error(a, 6), mean_and_error(b, 6));
     let per = 1.0 - (1.0f64 - 1e-3).powf(1.0 / ma.len() as f64);
     let (ka, kb) = ((a.len() - 1) as f64, (b.len() - 1) as f64);
     for (i, (x, y)) in ma.iter().zip(&mb).enumerate() {

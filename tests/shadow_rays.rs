@@ -9,7 +9,7 @@
 //!   candidates (the light covers more than the hemisphere's share, so the count is the most),
 //!   so the plain estimator traces exactly that many shadow rays; resampling with pct traces at
 //!   most ceil(pct LIGHT_SAMPLES); culling with a threshold above every candidate's luminance
-//!   traces, in expectation, sum_i lum(c_i) / T, which the plain render's unshadowed sum predicts.
+//!   traces, in expectation, sum_i luminance(c_i) / T, which the plain render's unshadowed sum predicts.
 
 mod common;
 use common::*;
@@ -55,35 +55,9 @@ fn settings(technique: Technique, spp: u32, resample: f32, cull: f32) -> RenderS
     }
 }
 
-fn lum(p: [f32; 3]) -> f64 {
-    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
-}
-
-/// Per seed: the luminance means of the 4x4 blocks, then the image's.
-fn block_means(out: &RenderOutput) -> Vec<f64> {
-    let (bw, bh) = (W / 4, H / 4);
-    let mut v = vec![0.0; (bw * bh) as usize + 1];
-    for y in 0..H {
-        for x in 0..W {
-            let l = lum(out.film.beauty[(y * W + x) as usize]);
-            v[((y / 4) * bw + x / 4) as usize] += l / 16.0;
-            v[(bw * bh) as usize] += l / f64::from(W * H);
-        }
-    }
-    v
-}
-
-/// Mean and variance of the mean over the seeds, per block.
+/// Mean and variance of the mean over the seeds, per 4x4 block, then for the whole image.
 fn stats(outs: &[RenderOutput]) -> Vec<(f64, f64)> {
-    let per: Vec<Vec<f64>> = outs.iter().map(block_means).collect();
-    let k = per.len() as f64;
-    (0..per[0].len())
-        .map(|b| {
-            let m = per.iter().map(|p| p[b]).sum::<f64>() / k;
-            let var = per.iter().map(|p| (p[b] - m).powi(2)).sum::<f64>() / (k - 1.0);
-            (m, var / k)
-        })
-        .collect()
+    block_stats(outs, 4)
 }
 
 fn shadow_rays(outs: &[RenderOutput], spp: u32) -> u64 {
@@ -173,7 +147,7 @@ fn resampling_and_culling_are_unbiased_and_trace_fewer_rays() {
         "resample 0.5: {r} shadow rays for {samples} camera samples"
     );
 
-    // Culling: E[rays] = sum_i lum(c_i) / T with every lum(c_i) <= T. The unshadowed sum is the
+    // Culling: E[rays] = sum_i luminance(c_i) / T with every luminance(c_i) <= T. The unshadowed sum is the
     // occluder-free scene's image (same kernels: the same features).
     let open = self::scene(&scene_json(false));
     let open_prepared = renderer.prepare(&open, trace_mode()).expect("prepare");
@@ -189,10 +163,10 @@ fn resampling_and_culling_are_unbiased_and_trace_fewer_rays() {
             .unwrap_or_else(|e| panic!("render failed: {e}"))
     };
     let unshadowed = render_open(&settings(Technique::Light, spp, 1.0, 0.0), 7);
-    // Sum over every camera sample of sum_i lum(c_i), and its standard error over the seeds.
+    // Sum over every camera sample of sum_i luminance(c_i), and its standard error over the seeds.
     let totals: Vec<f64> = unshadowed
         .iter()
-        .map(|o| o.film.beauty.iter().map(|p| lum(*p)).sum::<f64>() * f64::from(spp))
+        .map(|o| o.film.beauty.iter().map(|p| luminance(*p)).sum::<f64>() * f64::from(spp))
         .collect();
     let k = totals.len() as f64;
     let total = totals.iter().sum::<f64>();

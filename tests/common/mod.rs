@@ -247,3 +247,40 @@ pub fn illum_cli(args: &[&str]) -> (i32, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// Rec. 709 luminance of a pixel.
+pub fn luminance(p: [f32; 3]) -> f64 {
+    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+}
+
+/// Independent renders (one per seed) summarised per `block` x `block` pixel block (whole
+/// blocks only), followed by the whole image: for each, the mean luminance over the seeds and
+/// the variance of that mean from the seeds' scatter.
+pub fn block_stats(outs: &[RenderOutput], block: u32) -> Vec<(f64, f64)> {
+    let per: Vec<Vec<f64>> = outs
+        .iter()
+        .map(|o| {
+            let f = &o.film;
+            let (bx, by) = (f.width / block, f.height / block);
+            let mut v = vec![0.0; (bx * by) as usize + 1];
+            for y in 0..f.height {
+                for x in 0..f.width {
+                    let l = luminance(f.beauty[(y * f.width + x) as usize]);
+                    if x < bx * block && y < by * block {
+                        v[((y / block) * bx + x / block) as usize] += l / f64::from(block * block);
+                    }
+                    v[(bx * by) as usize] += l / f64::from(f.width * f.height);
+                }
+            }
+            v
+        })
+        .collect();
+    let k = per.len() as f64;
+    (0..per[0].len())
+        .map(|b| {
+            let m = per.iter().map(|p| p[b]).sum::<f64>() / k;
+            let var = per.iter().map(|p| (p[b] - m).powi(2)).sum::<f64>() / (k - 1.0);
+            (m, var / k)
+        })
+        .collect()
+}
