@@ -136,6 +136,9 @@ cases! {
     sphere_light_tiny => "sphere-light-tiny",
     sphere_light_touching => "sphere-light-touching",
     rect_light_huge_far => "rect-light-huge-far",
+    rect_light_huge_near => "rect-light-huge-near",
+    disk_light_huge_near => "disk-light-huge-near",
+    emitter_huge_near => "emitter-huge-near",
     far_from_origin => "far-from-origin",
     dome_hot_pixel => "dome-hot-pixel",
     triangles_degenerate => "triangles-degenerate",
@@ -158,6 +161,73 @@ fn closed_form_refuses_what_it_cannot_do() {
     let e = illum::stress::closed_form::image(&s).unwrap_err();
     assert!(e.contains("only rects and meshes"), "{e}");
     assert!(CASES.iter().any(|c| c.reference == Reference::ClosedForm));
+}
+
+/// Emitters that nearly fill the receiver's hemisphere (a 4000-wide rect, a radius-20 disk seen at
+/// its rim, a 200-wide emissive quad, all 1 above the floor): every light sample is bounded, as
+/// the light sampler's pdf promises (glsl/shared/light_sampling.glsl): at least 1 / (4 pi) per
+/// steradian over the emitter for the planar mixture, 1 / (2 pi) for a rect (hemisphere or
+/// spherical rect), so a Lambert floor of albedo ρ under radiance L gets ρ/π L cos / pdf ≤ 4 ρ L
+/// (2 ρ L) per sample. At 1 spp a pixel is one camera sample. Area sampling alone gave samples of
+/// up to ρ/π L A / d² (before the change: 2.97 under the rect, 62 under the disk).
+#[test]
+fn huge_emitters_near_the_floor_give_bounded_samples() {
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    // pdf ≥ 1 / (2 pi) for a rect (hemisphere or spherical rect), ≥ 1 / (4 pi) for the mixture.
+    for (name, per_emitter) in [
+        ("rect-light-huge-near", 2.0),
+        ("disk-light-huge-near", 4.0),
+        ("emitter-huge-near", 4.0),
+    ] {
+        let (_, scene) = load_case(name, 32, 32);
+        let rho = scene
+            .materials
+            .iter()
+            .map(|m| m.diffuse.max_element())
+            .fold(0.0f32, f32::max);
+        let radiance = scene
+            .lights
+            .iter()
+            .map(|l| l.radiance().max_element())
+            .chain(scene.materials.iter().map(|m| m.emission.max_element()))
+            .fold(0.0f32, f32::max);
+        // Each emitter (a light, or one emissive triangle, all looped over below 32) adds its own
+        // bounded estimate.
+        let emitters = scene.lights.len()
+            + scene
+                .meshes
+                .iter()
+                .filter(|m| scene.materials[m.material as usize].emission.max_element() > 0.0)
+                .map(|m| m.indices.len() / 3)
+                .sum::<usize>();
+        let bound = per_emitter * rho * radiance * emitters as f32;
+        let settings = RenderSettings {
+            spp: 1,
+            seed: 3,
+            trace: trace_mode(),
+            integrator: IntegratorSettings {
+                technique: Technique::Light,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let out = renderer
+            .render(&scene, &settings, &mut |_, _| {})
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let max = out
+            .film
+            .beauty
+            .iter()
+            .flatten()
+            .fold(0.0f32, |m, &c| m.max(c));
+        eprintln!("{name}: largest 1-spp pixel {max:.4}, bound {bound:.4}");
+        assert!(
+            max > 0.0 && max <= bound * (1.0 + 1e-5),
+            "{name}: a 1-spp pixel of {max} above {emitters} × {per_emitter} ρ L = {bound}"
+        );
+    }
+    assert_no_validation_messages(&ctx);
 }
 
 /// The firefly clamp: off by default (nothing clamped), and when on it lowers a tiny bright

@@ -21,16 +21,27 @@
 // * rect (p0 centre, p1/p2 full edges): solid-angle sampling (Urena et al. 2013, spherical
 //   rectangle) when its solid angle Omega is in [1e-3, 6.22] sr, with Omega from two Van Oosterom-
 //   Strackee triangles whose triple product comes from the light's own edges (float32-robust,
-//   TECHNIQUES 2.1); area sampling otherwise. pdf() takes the same decision from the same Omega.
+//   TECHNIQUES 2.1); area sampling below 1e-3 sr; above 6.22 sr (a rect that nearly encloses p's
+//   hemisphere) uniform sampling of the hemisphere facing the rect, a direction that misses it being
+//   no sample (>= 99% hit). pdf() takes the same decision from the same Omega.
 // * sphere (p0 centre, radius): uniform cone of the visible cap with the stable 1 - cos(theta_max)
 //   (2.2); from inside (two-sided only) uniform area sampling.
-// * disk (p0 centre, radius; p1 normal; p2 tangent): area sampling, concentric map (2.3).
+// * disk (p0 centre, radius; p1 normal; p2 tangent): area sampling, concentric map (2.3); near a
+//   disk large for its distance, the planar mixture below.
 // * sun (p0 direction, cos(theta_max); p1.x = 1 - cos(theta_max)): uniform cone; delta light
 //   (delta = true, pdf = 1, no MIS) when p1.x == 0 (2.5).
 // * triangle (LIGHT_TRIANGLE: p0 vertex 0, p1/p2 edges to vertices 1 and 2): uniform area sampling
 //   (b1, b2) = sqrt(u1) (1 - u2, u2). Chosen over spherical-triangle sampling for robustness (no
 //   angle differences; the same float32 pitfalls as the rect's angle sum); MIS with BRDF samples
-//   covers the near/grazing configurations where area sampling is noisy.
+//   covers the grazing configurations where area sampling is noisy; near a triangle large for its
+//   distance, the planar mixture below.
+// * Planar mixture (disk, triangle): where the emitter's bounding radius rb about its centre is at
+//   least p's distance to the emitter's plane and to its bounding sphere (p close to a large
+//   emitter: a radius-20 disk 1 unit above), area sampling puts few samples where most light comes
+//   from and gives fireflies (weights up to area / d^2). There the sampler draws half its samples by
+//   area and half uniformly over the hemisphere facing the emitter (a miss is no sample); pdf =
+//   (p_area + 1 / (2 pi)) / 2 bounds every weight by 4 pi times the integrand. The decision
+//   depends on p and the light only, and pdf() repeats it.
 // * dome: piecewise-constant sampling of the map's cells (2.4; glsl/shared/dome_map.glsl) with the
 //   marginal/conditional CDFs of GpuDomeSampling (searched from guide tables), then a uniform
 //   position inside the cell:
@@ -83,6 +94,7 @@ bool in_cone(vec3 w, vec3 z, float om) {
 }
 const float RECT_OMEGA_MIN = 1e-3;         // solid-angle sampling range of rects (TECHNIQUES 2.1)
 const float RECT_OMEGA_MAX = 6.22;
+const float HEMISPHERE_PDF = 0.5 / PI;     // uniform hemisphere, 1 / (2 pi)
 
 LightSample no_light_sample() {
     LightSample s;
@@ -127,6 +139,41 @@ LightSample area_light_sample(vec3 p, vec3 x, vec3 nl, float area, vec2 uv) {
     return s;
 }
 
+// Uniform direction on the hemisphere about unit z; pdf = 1 / (2 pi).
+vec3 uniform_hemisphere(vec3 z, vec2 u) {
+    float ct = u.x;
+    float st = sqrt(max(0.0, 1.0 - ct * ct));
+    float phi = 2.0 * PI * u.y;
+    vec3 t, b;
+    make_basis(z, t, b);
+    return normalize(st * cos(phi) * t + st * sin(phi) * b + ct * z);
+}
+
+// Completes a direction sample w whose hit h (the light's *_hit(), pdf included) is known: a miss
+// is no sample.
+LightSample light_sample_from_hit(vec3 p, vec3 w, LightHit h) {
+    LightSample s = no_light_sample();
+    if (!(h.pdf > 0.0) || h.t == INF) return s;
+    s.wi = w;
+    s.dist = h.t;
+    s.x = p + h.t * w;
+    s.n = h.n;
+    s.uv = h.uv;
+    s.pdf = h.pdf;
+    return s;
+}
+
+// Whether p (pc = emitter centre - p, h = p's signed distance to the emitter's plane) is close to a
+// planar emitter of bounding radius rb about that centre: the planar mixture of the header.
+bool planar_mixture(vec3 pc, float h, float rb) {
+    return rb >= max(abs(h), length(pc) - rb);
+}
+
+// The mixture's pdf from the area pdf of the same direction.
+float planar_mixture_pdf(float area_pdf) {
+    return 0.5 * (area_pdf + HEMISPHERE_PDF);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Rect
 
@@ -152,6 +199,8 @@ float rect_solid_angle(vec3 p, vec3 s, vec3 ex, vec3 ey) {
 
 bool rect_use_solid_angle(float omega) { return omega >= RECT_OMEGA_MIN && omega <= RECT_OMEGA_MAX; }
 
+LightHit rect_hit(GpuLight l, vec3 p, vec3 w);
+
 LightSample sample_rect(GpuLight l, vec3 p, vec2 u) {
     LightSample s = no_light_sample();
     vec3 ex = l.p1.xyz, ey = l.p2.xyz;
@@ -163,6 +212,10 @@ LightSample sample_rect(GpuLight l, vec3 p, vec2 u) {
     float side = dot(p - l.p0.xyz, nl);
     if (side == 0.0 || (side < 0.0 && !light_two_sided(l))) return s;
     float omega = rect_solid_angle(p, corner, ex, ey);
+    if (omega > RECT_OMEGA_MAX) {
+        vec3 w = uniform_hemisphere(side > 0.0 ? -nl : nl, u);
+        return light_sample_from_hit(p, w, rect_hit(l, p, w));
+    }
     if (!rect_use_solid_angle(omega)) {
         return area_light_sample(p, corner + u.x * ex + u.y * ey, nl, area, u);
     }
@@ -230,7 +283,8 @@ LightHit rect_hit(GpuLight l, vec3 p, vec3 w) {
     h.n = N / area;
     h.uv = clamp(a + 0.5, 0.0, 1.0);
     float omega = rect_solid_angle(p, l.p0.xyz - 0.5 * eu - 0.5 * ev, eu, ev);
-    h.pdf = rect_use_solid_angle(omega) ? 1.0 / omega : t * t / abs(dn);   // |dn| = area |cos|
+    h.pdf = omega > RECT_OMEGA_MAX ? HEMISPHERE_PDF
+          : rect_use_solid_angle(omega) ? 1.0 / omega : t * t / abs(dn);   // |dn| = area |cos|
     return h;
 }
 
@@ -315,14 +369,26 @@ LightHit sphere_hit(GpuLight l, vec3 p, vec3 w) {
 // ---------------------------------------------------------------------------------------------
 // Disk
 
+LightHit disk_hit(GpuLight l, vec3 p, vec3 w);
+
 LightSample sample_disk(GpuLight l, vec3 p, vec2 u) {
     vec3 c = l.p0.xyz;
     float R = l.p0.w;
     vec3 nl = l.p1.xyz, td = l.p2.xyz, bd = cross(nl, td);
     float side = dot(p - c, nl);
     if (side == 0.0 || (side < 0.0 && !light_two_sided(l))) return no_light_sample();
+    bool mixture = planar_mixture(c - p, side, R);
+    if (mixture) {
+        if (u.x >= 0.5) {
+            vec3 w = uniform_hemisphere(side > 0.0 ? -nl : nl, vec2(2.0 * u.x - 1.0, u.y));
+            return light_sample_from_hit(p, w, disk_hit(l, p, w));
+        }
+        u.x *= 2.0;
+    }
     vec2 dk = concentric_disk(u);
-    return area_light_sample(p, c + R * (dk.x * td + dk.y * bd), nl, PI * R * R, 0.5 * dk + 0.5);
+    LightSample s = area_light_sample(p, c + R * (dk.x * td + dk.y * bd), nl, PI * R * R, 0.5 * dk + 0.5);
+    if (mixture && s.pdf > 0.0) s.pdf = planar_mixture_pdf(s.pdf);
+    return s;
 }
 
 LightHit disk_hit(GpuLight l, vec3 p, vec3 w) {
@@ -341,8 +407,9 @@ LightHit disk_hit(GpuLight l, vec3 p, vec3 w) {
     if (dot(q, q) > rm * rm) return h;
     h.t = t;
     h.n = nl;
-    h.uv = vec2(dot(q, l.p2.xyz), dot(q, cross(nl, l.p2.xyz))) / (2.0 * R) + 0.5;
+    h.uv = clamp(vec2(dot(q, l.p2.xyz), dot(q, cross(nl, l.p2.xyz))) / (2.0 * R) + 0.5, 0.0, 1.0);
     h.pdf = t * t / (PI * R * R * abs(dn));
+    if (planar_mixture(pc, side, R)) h.pdf = planar_mixture_pdf(h.pdf);
     return h;
 }
 
@@ -384,6 +451,16 @@ LightHit sun_hit(GpuLight l, vec3 w) {
 // ---------------------------------------------------------------------------------------------
 // Triangle
 
+// The triangle's planar-mixture decision (header): centroid and bounding radius about it, with
+// p's signed distance to the plane along the unit normal nl.
+bool triangle_mixture(vec3 v0, vec3 e1, vec3 e2, vec3 p, float side) {
+    vec3 g = (e1 + e2) / 3.0;
+    float rb = sqrt(max(dot(g, g), max(dot(e1 - g, e1 - g), dot(e2 - g, e2 - g))));
+    return planar_mixture(v0 + g - p, side, rb);
+}
+
+LightHit triangle_hit(GpuLight l, vec3 p, vec3 w);
+
 LightSample sample_triangle(GpuLight l, vec3 p, vec2 u) {
     vec3 v0 = l.p0.xyz, e1 = l.p1.xyz, e2 = l.p2.xyz;
     vec3 N = cross(e1, e2);
@@ -392,9 +469,19 @@ LightSample sample_triangle(GpuLight l, vec3 p, vec2 u) {
     vec3 nl = N / len;
     float side = dot(p - v0, nl);
     if (side == 0.0 || (side < 0.0 && !light_two_sided(l))) return no_light_sample();
+    bool mixture = triangle_mixture(v0, e1, e2, p, side);
+    if (mixture) {
+        if (u.x >= 0.5) {
+            vec3 w = uniform_hemisphere(side > 0.0 ? -nl : nl, vec2(2.0 * u.x - 1.0, u.y));
+            return light_sample_from_hit(p, w, triangle_hit(l, p, w));
+        }
+        u.x *= 2.0;
+    }
     float su = sqrt(u.x);
     vec2 bc = vec2(su * (1.0 - u.y), su * u.y);
-    return area_light_sample(p, v0 + bc.x * e1 + bc.y * e2, nl, 0.5 * len, bc);
+    LightSample s = area_light_sample(p, v0 + bc.x * e1 + bc.y * e2, nl, 0.5 * len, bc);
+    if (mixture && s.pdf > 0.0) s.pdf = planar_mixture_pdf(s.pdf);
+    return s;
 }
 
 LightHit triangle_hit(GpuLight l, vec3 p, vec3 w) {
@@ -419,8 +506,10 @@ LightHit triangle_hit(GpuLight l, vec3 p, vec3 w) {
     if (!(t > 0.0) || b1 < -m || b2 < -m || b1 + b2 > 1.0 + m) return h;
     h.t = t;
     h.n = N / len;
-    h.uv = vec2(b1, b2);
+    h.uv = clamp(vec2(b1, b2), 0.0, 1.0);   // hits within the edge margin
     h.pdf = 2.0 * t * t / abs(dn);   // t^2 / (area |cos|), area = |N| / 2
+    // The sampler's own expression for p's distance to the plane, so both decide alike.
+    if (triangle_mixture(v0, e1, e2, p, dot(p - v0, N / len))) h.pdf = planar_mixture_pdf(h.pdf);
     return h;
 }
 
