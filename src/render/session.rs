@@ -110,7 +110,7 @@ pub struct RenderSession<'p> {
     aov_targets: Vec<(u32, TargetImage, ComputePipeline)>,
     camera: Camera,
     target: TargetImage,
-    /// Wall time of the last cache warm-up (about 0 without a cache).
+    /// Wall time of the last cache warm-up (0 without a cache).
     warmup_seconds: f64,
     /// Samples per dispatch: 1 on drivers that cut long loops short (see `probe`).
     per_dispatch: u32,
@@ -231,6 +231,11 @@ impl RenderSession<'_> {
         kernels.configure(&self.ctx, self.prepared, &mut f, &self.settings)?;
         kernels.bind(&self.frame, &self.film, self.aovs.as_ref());
         self.frame_data = f;
+        self.warmup_seconds = 0.0;
+        if f.radiosity_table == 0 {
+            return Ok(()); // no cache: nothing to warm up
+        }
+        let warm = Instant::now();
         // The warm-up's update kernel reads the frame constants from the buffer.
         let (frame, data) = (self.frame.buffer, self.frame_data);
         self.ctx.one_shot(|cmd| {
@@ -242,8 +247,7 @@ impl RenderSession<'_> {
                 barrier(&self.ctx.device, cmd);
             }
         })?;
-        let warm = Instant::now();
-        // Samples [0, 1): brings the cache (if any) to the table every pass reads.
+        // Samples [0, 1): brings the cache to the table every pass reads.
         kernels.begin(&self.ctx, self.settings.seed, 0, 1)?;
         self.warmup_seconds = warm.elapsed().as_secs_f64();
         Ok(())
@@ -278,7 +282,7 @@ impl RenderSession<'_> {
         self.refresh()
     }
 
-    /// Wall time of the last cache warm-up in seconds (about 0 without a cache).
+    /// Wall time of the last cache warm-up in seconds (0 without a cache).
     pub fn warmup_seconds(&self) -> f64 {
         self.warmup_seconds
     }
