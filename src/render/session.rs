@@ -199,6 +199,22 @@ impl Renderer {
             samples: 0,
         };
         s.refresh()?;
+        // Drivers that compile a pipeline at its first dispatch (llvmpipe: up to tens of seconds
+        // for `full`) do it now, not in the host's first frame: an empty dispatch, as the
+        // blocking render's warm-up (the first pass clears the film).
+        let k = s
+            .kernels
+            .as_ref()
+            .expect("kernels live as long as the session");
+        s.ctx.one_shot(|cmd| {
+            k.record(
+                cmd,
+                &PassConstants {
+                    tile: [0, 0, 1, 1],
+                    ..Default::default()
+                },
+            )
+        })?;
         Ok(s)
     }
 }
