@@ -270,9 +270,9 @@ unsafe fn integrator_arg(name: *const c_char) -> Result<IntegratorKind, Error> {
 
 /// A progressive render of `prepared` through `scene`'s camera into `target`, with `integrator`
 /// ("direct", "path" or "full"; NULL: "direct"). `prepared` must not be used or destroyed until
-/// the session is. With "full" this warms the radiosity cache up first, blocking; the session's
-/// images equal illum_render's only for "direct" (illum_render refreshes the cache during the
-/// render; see RenderSession in the Rust docs).
+/// the session is. Creation compiles the integrator's kernels (blocking), and with "full" warms
+/// the radiosity cache up; the cache then stays fixed during passes (see RenderSession in the
+/// Rust docs). illum_render renders with "direct", whose session images equal it bit for bit.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn illum_session_create(
     context: *mut IllumContext,
