@@ -36,6 +36,9 @@ typedef struct IllumPrepared IllumPrepared;
 // A validated scene (host memory).
 typedef struct IllumScene IllumScene;
 
+// A scene being built (see illum_scene_builder_create).
+typedef struct IllumSceneBuilder IllumSceneBuilder;
+
 // A progressive render recorded into the host's command buffers.
 typedef struct IllumSession IllumSession;
 
@@ -118,6 +121,70 @@ enum IllumStatus illum_context_from_external(const struct IllumExternalDevice *e
 // Waits for illum's work and frees the context (the host's device stays).
 void illum_context_destroy(struct IllumContext *context);
 
+// Panics inside illum with `message` (NULL: a fixed one) under the same guard as every other
+// call: for hosts' and illum's tests that a panic comes back as ILLUM_STATUS_ERROR_PANIC with
+// its message and the process goes on. Nothing else happens.
+enum IllumStatus illum_debug_panic(const char *message);
+
+// A builder whose look-at camera is at `position` (3 doubles) looking at `look_at`, with a
+// vertical field of view of `fov_y` degrees and `width` × `height` pixels.
+enum IllumStatus illum_scene_builder_create(const double *position,
+                                            const double *look_at,
+                                            double fov_y,
+                                            uint32_t width,
+                                            uint32_t height,
+                                            struct IllumSceneBuilder **out_builder);
+
+// Adds material `name`: a JSON object of the scene format's "materials" section, e.g.
+// `{"diffuse": [0.8, 0.2, 0.2], "diffuse_texture": "checker"}`.
+enum IllumStatus illum_scene_builder_material(struct IllumSceneBuilder *builder,
+                                              const char *name,
+                                              const char *json);
+
+// Adds shape `name`: a JSON object of the scene format's "shapes" section (sphere, rect, disk;
+// meshes from host memory through illum_scene_builder_mesh).
+enum IllumStatus illum_scene_builder_shape(struct IllumSceneBuilder *builder,
+                                           const char *name,
+                                           const char *json);
+
+// Adds light `name`: a JSON object of the scene format's "lights" section.
+enum IllumStatus illum_scene_builder_light(struct IllumSceneBuilder *builder,
+                                           const char *name,
+                                           const char *json);
+
+// Adds triangle mesh `name` of material `material` from host arrays (copied): `vertex_count`
+// positions (3 floats each), optional normals (3 floats each) and uvs (2 floats each) per vertex
+// (NULL: none), `index_count` indices (3 per triangle, counter-clockwise = front), and an
+// optional object-to-world matrix (16 doubles, row-major; NULL: identity).
+enum IllumStatus illum_scene_builder_mesh(struct IllumSceneBuilder *builder,
+                                          const char *name,
+                                          const char *material,
+                                          const float *positions,
+                                          const float *normals,
+                                          const float *uvs,
+                                          uintptr_t vertex_count,
+                                          const uint32_t *indices,
+                                          uintptr_t index_count,
+                                          const double *matrix);
+
+// Adds texture `name` from host pixels (copied): `width` × `height` texels, row-major, top row
+// first, `channels` floats each (3: RGB, alpha 1; 4: RGBA), linear, or sRGB-encoded in RGB when
+// `srgb` is non-zero.
+enum IllumStatus illum_scene_builder_texture(struct IllumSceneBuilder *builder,
+                                             const char *name,
+                                             uint32_t width,
+                                             uint32_t height,
+                                             uint32_t channels,
+                                             const float *pixels,
+                                             uint32_t srgb);
+
+// Validates what was added (errors name the object and field, as the loader's do) and returns
+// the scene; the builder stays usable.
+enum IllumStatus illum_scene_builder_build(const struct IllumSceneBuilder *builder,
+                                           struct IllumScene **out_scene);
+
+void illum_scene_builder_destroy(struct IllumSceneBuilder *builder);
+
 // A scene from scene JSON (docs/scene-format.md); relative paths resolve against `base_dir`
 // (NULL: the working directory). Errors name the field and value.
 enum IllumStatus illum_scene_from_json(const char *json,
@@ -167,14 +234,36 @@ enum IllumStatus illum_render(struct IllumContext *context,
                               float *rgb,
                               uintptr_t capacity);
 
-// A progressive render of `prepared` through `scene`'s camera into `target`. `prepared` must not
-// be used or destroyed until the session is.
+// A progressive render of `prepared` through `scene`'s camera into `target`, with `integrator`
+// ("direct", "path" or "full"; NULL: "direct"). `prepared` must not be used or destroyed until
+// the session is. Creation compiles the integrator's kernels (blocking), and with "full" warms
+// the radiosity cache up; the cache then stays fixed during passes (see RenderSession in the
+// Rust docs). illum_render renders with "direct", whose session images equal it bit for bit.
 enum IllumStatus illum_session_create(struct IllumContext *context,
                                       struct IllumPrepared *prepared,
                                       const struct IllumScene *scene,
+                                      const char *integrator,
                                       uint64_t seed,
                                       const struct IllumTarget *target,
                                       struct IllumSession **out_session);
+
+// Also resolves AOV plane `plane` (e.g. "Direct", "IndirectDiffuse", "Reflection" for the path
+// and full integrators) into the host's `target` from the next pass on; an unknown plane is
+// ILLUM_STATUS_ERROR_INVALID with the integrator's planes in the message. The host's passes must
+// have completed.
+enum IllumStatus illum_session_add_aov_target(struct IllumSession *session,
+                                              const char *plane,
+                                              const struct IllumTarget *target);
+
+// Brings the session's prepared scene to the edited `scene` (materials, lights, instance
+// transforms; its camera is ignored: illum_session_set_camera) and warms a radiosity cache up
+// again (blocking). The host's passes must have completed; the next pass should start at 0.
+enum IllumStatus illum_session_update_scene(struct IllumSession *session,
+                                            const struct IllumScene *scene);
+
+// Warms the radiosity cache ("full") up again for the current camera, blocking (e.g. after a
+// large camera move). The host's passes must have completed.
+enum IllumStatus illum_session_refresh_cache(struct IllumSession *session);
 
 // Moves the session's camera to `scene`'s; the next pass should start at sample 0.
 enum IllumStatus illum_session_set_camera(struct IllumSession *session,

@@ -5,8 +5,9 @@
 use std::path::Path;
 use std::process::Command;
 
-#[test]
-fn the_c_program_builds_against_the_header_and_passes() {
+/// Compiles the C program `source` (relative to the repository) against include/illum.h,
+/// examples/embed_host.h and libillum.a into a temporary directory; returns the executable.
+fn compile(source: &str, name: &str) -> std::path::PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     // target/<profile>/deps/capi-… → target/<profile>
     let exe = std::env::current_exe().unwrap();
@@ -20,7 +21,7 @@ fn the_c_program_builds_against_the_header_and_passes() {
     );
     let dir = std::env::temp_dir().join(format!("illum-capi-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let program = dir.join("embed_test");
+    let program = dir.join(name);
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     let compiled = Command::new(&cc)
         .args([
@@ -32,7 +33,9 @@ fn the_c_program_builds_against_the_header_and_passes() {
             "-I",
         ])
         .arg(root.join("include"))
-        .arg(root.join("tests/capi/embed_test.c"))
+        .arg("-I")
+        .arg(root.join("examples"))
+        .arg(root.join(source))
         .arg(&lib)
         .args(["-lvulkan", "-lm", "-ldl", "-lpthread", "-lgcc_s", "-o"])
         .arg(&program)
@@ -40,9 +43,15 @@ fn the_c_program_builds_against_the_header_and_passes() {
         .expect("running the C compiler");
     assert!(
         compiled.status.success(),
-        "{cc} failed:\n{}",
+        "{cc} failed on {source}:\n{}",
         String::from_utf8_lossy(&compiled.stderr)
     );
+    program
+}
+
+#[test]
+fn the_c_program_builds_against_the_header_and_passes() {
+    let program = compile("tests/capi/embed_test.c", "embed_test");
     let run = Command::new(&program).output().unwrap();
     let (stdout, stderr) = (
         String::from_utf8_lossy(&run.stdout),
@@ -53,6 +62,40 @@ fn the_c_program_builds_against_the_header_and_passes() {
         "the C test failed ({:?}):\n{stdout}\n{stderr}",
         run.status
     );
+}
+
+/// examples/embed.c, the C host, on a tiny image with validation on (any message fails it): ten
+/// passes, each update and pass timed, and a PFM of the image with the header and size it says.
+#[test]
+fn the_c_example_runs() {
+    let program = compile("examples/embed.c", "embed");
+    let out = program.with_extension("pfm");
+    let run = Command::new(&program)
+        .arg(&out)
+        .args(["12", "8", "4"])
+        .env("ILLUM_VALIDATION", "1")
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr),
+    );
+    assert!(
+        run.status.success(),
+        "examples/embed.c failed ({:?}):\n{stdout}\n{stderr}",
+        run.status
+    );
+    for line in [
+        "pass 9: samples [1, 4)",
+        "update: camera",
+        "illum_render (blocking)",
+    ] {
+        assert!(stdout.contains(line), "no {line:?} in:\n{stdout}");
+    }
+    let pfm = std::fs::read(&out).unwrap();
+    let header = b"PF\n12 8\n-1.0\n";
+    assert!(pfm.starts_with(header), "{:?}", &pfm[..16.min(pfm.len())]);
+    assert_eq!(pfm.len(), header.len() + 12 * 8 * 3 * 4);
 }
 
 /// The committed header is what cbindgen makes of src/capi.rs (where cbindgen is installed:

@@ -343,3 +343,140 @@ fn record_pass_in_a_host_frame_equals_the_render_bit_for_bit() {
     unsafe { device.destroy_device(None) };
     app.assert_silent();
 }
+
+/// Bit-for-bit equality of a host image's RGB with a reference, and alpha 1.
+fn assert_same_bits(what: &str, image: &[[f32; 4]], reference: &[[f32; 3]]) {
+    assert_eq!(image.len(), reference.len(), "{what}");
+    for (i, (p, q)) in image.iter().zip(reference).enumerate() {
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&p[..3]), bits(q), "{what}, pixel {i}: {p:?} vs {q:?}");
+        assert_eq!(p[3], 1.0, "{what}, pixel {i}");
+    }
+}
+
+/// Sessions of the integrators with AOV planes (`path`, `full`), in the host's frame under
+/// synchronization validation: the beauty and every AOV image equal the blocking render's beauty
+/// and AOV planes bit for bit, `full` against the render with `radiosity_refresh` off (its cache
+/// warmed once, see src/render/session.rs), also after a camera move and `refresh_cache`.
+#[test]
+fn sessions_with_aov_planes_equal_the_render_bit_for_bit() {
+    use illum::render::{IntegratorKind, IntegratorSettings};
+    let app = App::new();
+    // Ray queries where the driver has them: the integrators' kernels compile faster there.
+    let req = app.requirements();
+    let (device, ctx) = app.device(req.ray_query.as_ref().unwrap_or(&req.base));
+    let ctx = ctx.expect("the application's device");
+    let scene = common::scene(common::SMALL_SCENE);
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let r = Renderer::new(ctx.clone());
+    let mut moved = scene.camera.clone();
+    moved.position = glam::DVec3::new(-0.8, 1.5, 2.6);
+    let mut edited = scene.clone();
+    edited.camera = moved.clone();
+    let ball = edited.materials.iter_mut().find(|m| m.name == "ball");
+    ball.unwrap().diffuse = glam::Vec3::new(0.2, 0.6, 0.3);
+    // SAFETY: the host's objects are destroyed below, before the device.
+    let host = unsafe {
+        host::HostFrame::with_images(&app.instance, app.pd, &device, app.queue_family, [w, h], 4)
+    };
+    for kind in [IntegratorKind::Path, IntegratorKind::Full] {
+        let settings = RenderSettings {
+            spp: 4,
+            seed: 11,
+            integrator: IntegratorSettings {
+                kind,
+                radiosity_refresh: false,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let mut prepared = r.prepare(&scene, TraceMode::Auto).unwrap();
+        let render = |p: &PreparedScene, camera: &illum::scene::Camera, s: &RenderSettings| {
+            r.render_prepared(p, camera, s, &[11], &mut |_, _| {})
+                .unwrap()
+                .remove(0)
+                .film
+        };
+        let one = RenderSettings {
+            spp: 1,
+            ..settings.clone()
+        };
+        let refs = [
+            render(&prepared, &scene.camera, &one),
+            render(&prepared, &scene.camera, &settings),
+            render(&prepared, &moved, &settings),
+        ];
+        let planes: Vec<&str> = refs[0].aovs.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(planes, ["Direct", "IndirectDiffuse", "Reflection"]);
+        if kind == IntegratorKind::Full {
+            // The setting matters: generations during the render change the image.
+            let mut on = settings.clone();
+            on.integrator.radiosity_refresh = true;
+            assert!(render(&prepared, &scene.camera, &on).beauty != refs[1].beauty);
+        }
+        let images = {
+            let mut session = r
+                .session(&mut prepared, &scene.camera, &settings, host.target())
+                .unwrap();
+            assert_eq!(session.aov_planes(), &planes[..]);
+            let e = session
+                .add_aov_target("Albedo", host.target_at(1))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("\"Albedo\"") && e.contains("Direct, IndirectDiffuse, Reflection"),
+                "{e}"
+            );
+            for (k, plane) in planes.iter().enumerate() {
+                session
+                    .add_aov_target(plane, host.target_at(k + 1))
+                    .unwrap();
+            }
+            let pass = |session: &mut illum::render::RenderSession, first, count| {
+                host.frame_all(|cmd| {
+                    // SAFETY: recording, outside the host's render pass; the frame waits.
+                    unsafe {
+                        session.record_pass(
+                            cmd,
+                            &Pass {
+                                first_sample: first,
+                                sample_count: count,
+                            },
+                        )
+                    }
+                    .unwrap()
+                })
+            };
+            let mut images = vec![pass(&mut session, 0, 1), pass(&mut session, 1, 3)];
+            session.set_camera(&moved).unwrap();
+            session.refresh_cache().unwrap();
+            images.push(pass(&mut session, 0, 4));
+            // A material edit: `full` warms its cache up again.
+            session.update_scene(&edited).unwrap();
+            images.push(pass(&mut session, 0, 4));
+            images
+        };
+        // The prepared scene now holds the edit.
+        let mut refs = Vec::from(refs);
+        refs.push(render(&prepared, &moved, &settings));
+        for (k, (image, reference)) in images.iter().zip(&refs).enumerate() {
+            let what = format!("{} image {k}", kind.name());
+            assert_same_bits(&format!("{what} beauty"), &image[0], &reference.beauty);
+            for (p, plane) in reference.aovs.iter().enumerate() {
+                assert_same_bits(&format!("{what} {}", plane.name), &image[p + 1], &plane.rgb);
+            }
+        }
+        assert_eq!(images.len(), 4);
+        assert!(
+            refs[0].beauty != refs[1].beauty
+                && refs[1].beauty != refs[2].beauty
+                && refs[2].beauty != refs[3].beauty
+        );
+    }
+    host.destroy();
+    drop(r);
+    drop(ctx);
+    // SAFETY: illum's context is gone.
+    unsafe { device.destroy_device(None) };
+    app.assert_silent();
+}

@@ -22,7 +22,9 @@ use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+mod builder;
 mod scene;
+pub use builder::*;
 pub use scene::*;
 
 /// What a call returned.
@@ -123,7 +125,11 @@ fn out<T>(dst: *mut *mut T, v: T) -> Result<(), Error> {
 /// the thread's next call into illum.
 #[unsafe(no_mangle)]
 pub extern "C" fn illum_last_error() -> *const c_char {
-    LAST_ERROR.with(|e| e.borrow().as_ptr())
+    // The thread-local is gone only while the thread exits: then "".
+    catch_unwind(|| LAST_ERROR.try_with(|e| e.borrow().as_ptr()).ok())
+        .ok()
+        .flatten()
+        .unwrap_or(c"".as_ptr())
 }
 
 /// What illum needs of a device (see illum::vk::requirements): the host enables these when it
@@ -316,4 +322,19 @@ pub unsafe extern "C" fn illum_context_destroy(context: *mut IllumContext) {
         // SAFETY: a handle from illum_context_from_external, destroyed once.
         let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(context) })));
     }
+}
+
+/// Panics inside illum with `message` (NULL: a fixed one) under the same guard as every other
+/// call: for hosts' and illum's tests that a panic comes back as ILLUM_STATUS_ERROR_PANIC with
+/// its message and the process goes on. Nothing else happens.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn illum_debug_panic(message: *const c_char) -> IllumStatus {
+    guard(|| unsafe {
+        let m = if message.is_null() {
+            "illum_debug_panic"
+        } else {
+            str_arg(message, "message")?
+        };
+        panic!("{m}")
+    })
 }

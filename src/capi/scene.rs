@@ -5,7 +5,7 @@ use super::{
     str_arg,
 };
 use crate::error::Error;
-use crate::render::{ImageState, Pass, RenderSettings};
+use crate::render::{ImageState, IntegratorKind, IntegratorSettings, Pass, RenderSettings};
 use ash::vk::{self, Handle};
 use std::ffi::c_char;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -47,7 +47,7 @@ pub unsafe extern "C" fn illum_scene_load(
 pub unsafe extern "C" fn illum_scene_destroy(scene: *mut IllumScene) {
     if !scene.is_null() {
         // SAFETY: a handle from illum_scene_*, destroyed once.
-        drop(unsafe { Box::from_raw(scene) });
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(scene) })));
     }
 }
 
@@ -233,13 +233,52 @@ pub struct IllumTarget {
     pub after_access: vk::AccessFlags,
 }
 
-/// A progressive render of `prepared` through `scene`'s camera into `target`. `prepared` must not
-/// be used or destroyed until the session is.
+fn target_image(t: &IllumTarget) -> crate::render::TargetImage {
+    crate::render::TargetImage {
+        image: t.image,
+        view: t.view,
+        extent: [t.width, t.height],
+        before: ImageState {
+            layout: t.before_layout,
+            stage: t.before_stage,
+            access: t.before_access,
+        },
+        after: ImageState {
+            layout: t.after_layout,
+            stage: t.after_stage,
+            access: t.after_access,
+        },
+    }
+}
+
+/// The integrator named `name` ("direct", "path" or "full"; NULL: "direct").
+unsafe fn integrator_arg(name: *const c_char) -> Result<IntegratorKind, Error> {
+    if name.is_null() {
+        return Ok(IntegratorKind::Direct);
+    }
+    // SAFETY: the caller's NUL-terminated string.
+    let n = unsafe { str_arg(name, "integrator")? };
+    [
+        IntegratorKind::Direct,
+        IntegratorKind::Path,
+        IntegratorKind::Full,
+    ]
+    .into_iter()
+    .find(|k| k.name() == n)
+    .ok_or_else(|| Error::Invalid(format!("integrator {n:?}: expected direct, path or full")))
+}
+
+/// A progressive render of `prepared` through `scene`'s camera into `target`, with `integrator`
+/// ("direct", "path" or "full"; NULL: "direct"). `prepared` must not be used or destroyed until
+/// the session is. Creation compiles the integrator's kernels (blocking), and with "full" warms
+/// the radiosity cache up; the cache then stays fixed during passes (see RenderSession in the
+/// Rust docs). illum_render renders with "direct", whose session images equal it bit for bit.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn illum_session_create(
     context: *mut IllumContext,
     prepared: *mut IllumPrepared,
     scene: *const IllumScene,
+    integrator: *const c_char,
     seed: u64,
     target: *const IllumTarget,
     out_session: *mut *mut IllumSession,
@@ -249,30 +288,59 @@ pub unsafe extern "C" fn illum_session_create(
         let p: &'static mut IllumPrepared = handle(prepared, "prepared")?;
         let s = scene.as_ref().ok_or_else(|| null("scene"))?;
         let t = target.as_ref().ok_or_else(|| null("target"))?;
-        let target = crate::render::TargetImage {
-            image: t.image,
-            view: t.view,
-            extent: [t.width, t.height],
-            before: ImageState {
-                layout: t.before_layout,
-                stage: t.before_stage,
-                access: t.before_access,
-            },
-            after: ImageState {
-                layout: t.after_layout,
-                stage: t.after_stage,
-                access: t.after_access,
-            },
-        };
         let settings = RenderSettings {
             seed,
+            integrator: IntegratorSettings {
+                kind: integrator_arg(integrator)?,
+                ..Default::default()
+            },
             ..Default::default()
         };
-        let session = c
-            .renderer
-            .session(&mut p.prepared, &s.0.camera, &settings, target)?;
+        let session =
+            c.renderer
+                .session(&mut p.prepared, &s.0.camera, &settings, target_image(t))?;
         out(out_session, IllumSession { session })
     })
+}
+
+/// Also resolves AOV plane `plane` (e.g. "Direct", "IndirectDiffuse", "Reflection" for the path
+/// and full integrators) into the host's `target` from the next pass on; an unknown plane is
+/// ILLUM_STATUS_ERROR_INVALID with the integrator's planes in the message. The host's passes must
+/// have completed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn illum_session_add_aov_target(
+    session: *mut IllumSession,
+    plane: *const c_char,
+    target: *const IllumTarget,
+) -> IllumStatus {
+    guard(|| unsafe {
+        let s = handle(session, "session")?;
+        let plane = str_arg(plane, "plane")?;
+        let t = target.as_ref().ok_or_else(|| null("target"))?;
+        s.session.add_aov_target(plane, target_image(t))
+    })
+}
+
+/// Brings the session's prepared scene to the edited `scene` (materials, lights, instance
+/// transforms; its camera is ignored: illum_session_set_camera) and warms a radiosity cache up
+/// again (blocking). The host's passes must have completed; the next pass should start at 0.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn illum_session_update_scene(
+    session: *mut IllumSession,
+    scene: *const IllumScene,
+) -> IllumStatus {
+    guard(|| unsafe {
+        let s = handle(session, "session")?;
+        let scene = scene.as_ref().ok_or_else(|| null("scene"))?;
+        s.session.update_scene(&scene.0).map(|_| ())
+    })
+}
+
+/// Warms the radiosity cache ("full") up again for the current camera, blocking (e.g. after a
+/// large camera move). The host's passes must have completed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn illum_session_refresh_cache(session: *mut IllumSession) -> IllumStatus {
+    guard(|| unsafe { handle(session, "session")?.session.refresh_cache() })
 }
 
 /// Moves the session's camera to `scene`'s; the next pass should start at sample 0.

@@ -191,6 +191,7 @@ impl IntegratorArgs {
                 .map(|v| v == "on")
                 .or(c.radiosity_cache)
                 .unwrap_or(d.radiosity_cache),
+            radiosity_refresh: d.radiosity_refresh,
             technique,
             light_samples: self.light_samples,
             brdf_samples: self.brdf_samples,

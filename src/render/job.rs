@@ -18,9 +18,15 @@ pub fn settings_text(s: &RenderSettings) -> String {
         super::IntegratorKind::Direct => String::new(),
         super::IntegratorKind::Path => format!("max_depth={} ", it.max_depth),
         super::IntegratorKind::Full => format!(
-            "specular_depth={} radiosity_cache={} ",
+            "specular_depth={} radiosity_cache={} {}",
             it.specular_depth,
-            if it.radiosity_cache { "on" } else { "off" }
+            if it.radiosity_cache { "on" } else { "off" },
+            // Named only when off, so that parts of earlier versions keep their text.
+            if it.radiosity_refresh {
+                ""
+            } else {
+                "radiosity_refresh=off "
+            }
         ),
     };
     format!(

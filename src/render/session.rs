@@ -1,18 +1,19 @@
 //! Progressive rendering recorded into the host's own command buffers (issue 14): a
 //! [`RenderSession`] on a prepared scene records each pass (frame constants, dispatches, barriers)
 //! into a command buffer the host owns and submits, and writes the beauty into the host's storage
-//! image. The blocking [`Renderer::render`] stays for hosts that want nothing of this.
+//! image, and each AOV plane the host asks for ([`RenderSession::add_aov_target`]) into another.
+//! The blocking [`Renderer::render`] stays for hosts that want nothing of this.
 //!
 //! # Synchronisation contract
 //!
-//! - The target is a 2D `VkImage` of format `R32G32B32A32_SFLOAT` with `STORAGE` usage, its
+//! - A target is a 2D `VkImage` of format `R32G32B32A32_SFLOAT` with `STORAGE` usage, its
 //!   extent the camera's resolution, one mip level and layer, and a view of it; the host owns
 //!   both. [`TargetImage::before`] is the state (layout, stages, accesses) the host's earlier
 //!   commands leave it in; each pass transitions it from there to `GENERAL` for its compute
 //!   writes, and then to [`TargetImage::after`], the state the host's later commands expect
 //!   (e.g. `TRANSFER_SRC_OPTIMAL` for a copy, `SHADER_READ_ONLY_OPTIMAL` for sampling). The
 //!   previous contents are discarded (every pixel is written), so `before.layout` may be
-//!   `UNDEFINED`.
+//!   `UNDEFINED`. AOV targets follow the same contract, each with its own states.
 //! - A pass first records a global memory barrier from `COMPUTE_SHADER | TRANSFER` writes to
 //!   `COMPUTE_SHADER | TRANSFER` reads and writes: this orders it after the session's earlier
 //!   passes in the same queue, whatever command buffers they were recorded in. Its own work is
@@ -20,18 +21,38 @@
 //!   and descriptor sets.
 //! - The host records passes in the order it submits them, on the queue family of illum's
 //!   context, and keeps the session (and the prepared scene) alive until every command buffer
-//!   holding a pass has completed. Scene updates ([`RenderSession::update_scene`]) and dropping the
-//!   session must wait for the host's pending passes (a fence or `vkQueueWaitIdle`).
+//!   holding a pass has completed. Creating a session, [`RenderSession::update_scene`],
+//!   [`RenderSession::refresh_cache`], [`RenderSession::add_aov_target`] and dropping the
+//!   session must wait for the host's pending passes (a fence or `vkQueueWaitIdle`): they may
+//!   submit blocking work of illum's own on its queue.
 //!
-//! # What the image holds
+//! # What the images hold
 //!
-//! The beauty only (no AOV images yet), RGB the mean of the samples so far, alpha 1. The film's
-//! sums stay on the device in float32, where the blocking render moves each 256-sample block into
-//! exact host sums: up to 256 samples per pixel a pass gives the blocking render's image bit for
-//! bit wherever the device's division is correctly rounded (lavapipe; tests/embed.rs), beyond
-//! that the two differ in rounding.
+//! The beauty: RGB the mean of the samples so far, alpha 1; each AOV image likewise for its plane
+//! (the integrator's [`super::integrator::Integrator::aov_planes`], e.g. Direct,
+//! IndirectDiffuse and Reflection for `full` and `path`). The film's sums stay on the device in
+//! float32, where the blocking render moves each 256-sample block into exact host sums: up to 256
+//! samples per pixel a pass gives the blocking render's images bit for bit wherever the device's
+//! division is correctly rounded (lavapipe; tests/embed.rs), beyond that the two differ in
+//! rounding.
+//!
+//! # The radiosity cache (`full`)
+//!
+//! The blocking render builds the cache on the host from the device's update records: warm-up
+//! generations before the first sample, then a generation at samples 1, 2, 4, … The host's
+//! command buffers cannot hand records back mid-frame, so a session keeps the cache fixed during
+//! its passes: it runs the warm-up on illum's own queue, blocking, when it is created, after each
+//! [`RenderSession::update_scene`] that changed a table or an instance transform, and on
+//! [`RenderSession::refresh_cache`]; its images equal the blocking render's with
+//! `integrator.radiosity_refresh` off (same seed, same samples; the session ignores the setting).
+//! The cache is world-space, so a camera move keeps it; but its update paths start at the
+//! camera's pixels (and its shape follows the image size), so after a move it still covers what
+//! the old view saw: cells the new view reaches and the old did not are empty, and bounces there
+//! continue in place (time, not bias: radiosity.rs). A host that moved far calls `refresh_cache`
+//! (between frames) to warm it for the new view, after which the images equal the blocking
+//! render's through the new camera again.
 
-use super::film::FILM_BLOCK;
+use super::film::{AOV_CHANNELS, FILM_BLOCK};
 use super::integrator::{self, IntegratorPasses};
 use super::{PreparedScene, RenderSettings, Renderer, SceneUpdate};
 use crate::error::{Error, Result};
@@ -39,6 +60,7 @@ use crate::layout::*;
 use crate::scene::{Camera, Scene};
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
 use ash::vk;
+use std::time::Instant;
 
 /// Where an image is: its layout and the stages and accesses of the commands around.
 #[derive(Clone, Copy, Debug)]
@@ -81,8 +103,15 @@ pub struct RenderSession<'p> {
     frame: Buffer,
     frame_data: Frame,
     film: Buffer,
+    /// The integrator's AOV planes ([pixel][plane] vec4 sums), when it has any.
+    aovs: Option<Buffer>,
+    aov_planes: &'static [&'static str],
+    /// The host's AOV images: plane index, target, its resolve pipeline (descriptor set).
+    aov_targets: Vec<(u32, TargetImage, ComputePipeline)>,
     camera: Camera,
     target: TargetImage,
+    /// Wall time of the last cache warm-up (0 without a cache).
+    warmup_seconds: f64,
     /// Samples per dispatch: 1 on drivers that cut long loops short (see `probe`).
     per_dispatch: u32,
     /// Samples per pixel in the film after the last recorded pass.
@@ -91,7 +120,8 @@ pub struct RenderSession<'p> {
 
 impl Renderer {
     /// A session rendering `prepared` through `camera` into `target`, with the integrator, seed
-    /// and clamp of `settings` (its sample counts are the passes').
+    /// and clamp of `settings` (its sample counts are the passes'). With the `full` integrator
+    /// this warms the radiosity cache up first, blocking (see the module doc).
     pub fn session<'p>(
         &self,
         prepared: &'p mut PreparedScene,
@@ -102,33 +132,38 @@ impl Renderer {
         let ctx = self.context().clone();
         settings.check(camera.width, camera.height)?;
         check_extent(camera, &target)?;
+        let mut settings = settings.clone();
+        // Passes cannot refresh the cache (see the module doc).
+        settings.integrator.radiosity_refresh = false;
         let pixels = u64::from(camera.width) * u64::from(camera.height);
         let frame = ctx.upload(
             "session frame",
             std::slice::from_ref(&Frame::default()),
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         )?;
+        let film_usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
         let film = ctx.create_buffer(
             "session film",
             pixels * std::mem::size_of::<FilmPixel>() as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            film_usage,
             MemoryLocation::GpuOnly,
         )?;
-        let integrator = integrator::select(settings);
-        if !integrator.aov_planes().is_empty() {
-            // Their AOV planes and cache generations are not carried through sessions yet.
-            return Err(Error::Invalid(format!(
-                "a render session records the direct integrator only; {} renders through \
-                 Renderer::render or render_prepared",
-                integrator.name()
-            )));
-        }
+        let integrator = integrator::select(&settings);
+        let aov_planes = integrator.aov_planes();
+        let aovs = match aov_planes.len() {
+            0 => None,
+            p => Some(ctx.create_buffer(
+                "session aovs",
+                pixels * p as u64 * (AOV_CHANNELS * 4) as u64,
+                film_usage,
+                MemoryLocation::GpuOnly,
+            )?),
+        };
         // The prepared scene's kernels if an earlier render left them, given back on drop.
         let kernels = match prepared.take_kernels(integrator.name(), integrator.features()) {
             Some(k) => k,
             None => integrator.kernels(&ctx, prepared)?,
         };
-        kernels.bind(&frame, &film, None);
         let resolve = ComputePipeline::new(
             &ctx,
             "resolve_image",
@@ -146,7 +181,7 @@ impl Renderer {
         let mut s = RenderSession {
             ctx,
             prepared,
-            settings: settings.clone(),
+            settings,
             integrator: integrator.name(),
             features: integrator.features(),
             kernels: Some(kernels),
@@ -154,12 +189,32 @@ impl Renderer {
             frame,
             frame_data: Frame::default(),
             film,
+            aovs,
+            aov_planes,
+            aov_targets: Vec::new(),
             camera: camera.clone(),
             target,
+            warmup_seconds: 0.0,
             per_dispatch,
             samples: 0,
         };
-        s.refresh_frame();
+        s.refresh()?;
+        // Drivers that compile a pipeline at its first dispatch (llvmpipe: up to tens of seconds
+        // for `full`) do it now, not in the host's first frame: an empty dispatch, as the
+        // blocking render's warm-up (the first pass clears the film).
+        let k = s
+            .kernels
+            .as_ref()
+            .expect("kernels live as long as the session");
+        s.ctx.one_shot(|cmd| {
+            k.record(
+                cmd,
+                &PassConstants {
+                    tile: [0, 0, 1, 1],
+                    ..Default::default()
+                },
+            )
+        })?;
         Ok(s)
     }
 }
@@ -175,33 +230,128 @@ fn check_extent(camera: &Camera, target: &TargetImage) -> Result<()> {
 }
 
 impl RenderSession<'_> {
-    /// The frame constants of the camera, scene and settings (as `render_prepared` writes them).
-    fn refresh_frame(&mut self) {
+    /// Writes the frame constants of the camera, scene and settings (as `render_prepared`
+    /// does), binds the kernels to the session's buffers and warms the integrator's cache up
+    /// (blocking, on illum's queue): the host's passes must have completed.
+    fn refresh(&mut self) -> Result<()> {
         let gpu = &self.prepared.gpu;
         let mut f = gpu.frame;
         crate::gpu_scene::set_camera(&mut f, &self.camera, gpu.origin);
         integrator::select(&self.settings).configure(&mut f);
         f.clamp_luminance = self.settings.clamp.unwrap_or(0.0);
         f.nan_every = self.settings.inject_non_finite;
+        let kernels = self
+            .kernels
+            .as_ref()
+            .expect("kernels live as long as the session");
+        kernels.configure(&self.ctx, self.prepared, &mut f, &self.settings)?;
+        kernels.bind(&self.frame, &self.film, self.aovs.as_ref());
         self.frame_data = f;
+        self.warmup_seconds = 0.0;
+        if f.radiosity_table == 0 {
+            return Ok(()); // no cache: nothing to warm up
+        }
+        let warm = Instant::now();
+        // The warm-up's update kernel reads the frame constants from the buffer.
+        let (frame, data) = (self.frame.buffer, self.frame_data);
+        self.ctx.one_shot(|cmd| {
+            // SAFETY: the frame buffer is the session's; one_shot waits for the command buffer.
+            unsafe {
+                self.ctx
+                    .device
+                    .cmd_update_buffer(cmd, frame, 0, bytemuck::bytes_of(&data));
+                barrier(&self.ctx.device, cmd);
+            }
+        })?;
+        // Samples [0, 1): brings the cache to the table every pass reads.
+        kernels.begin(&self.ctx, self.settings.seed, 0, 1)?;
+        self.warmup_seconds = warm.elapsed().as_secs_f64();
+        Ok(())
     }
 
     /// Moves the camera for the passes recorded from now on (same resolution); the next pass
     /// should start afresh (first_sample 0). Nothing is uploaded here: each pass writes the
-    /// frame constants into its command buffer.
+    /// frame constants into its command buffer. A radiosity cache stays as it was warmed (see
+    /// the module doc).
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         check_extent(camera, &self.target)?;
         self.camera = camera.clone();
-        self.refresh_frame();
+        let gpu = &self.prepared.gpu;
+        crate::gpu_scene::set_camera(&mut self.frame_data, &self.camera, gpu.origin);
         Ok(())
     }
 
     /// Updates the prepared scene (see [`PreparedScene::update`]) for the passes recorded from
-    /// now on. The host's pending passes must have completed.
+    /// now on, and warms the radiosity cache up again if a table or transform changed. The
+    /// host's pending passes must have completed.
     pub fn update_scene(&mut self, scene: &Scene) -> Result<SceneUpdate> {
         let u = self.prepared.update(&self.ctx, scene)?;
-        self.refresh_frame();
+        if !u.tables.is_empty() || u.instances_moved {
+            self.refresh()?;
+        }
         Ok(u)
+    }
+
+    /// Warms the radiosity cache up again for the current camera (blocking; nothing to do
+    /// without a cache). The host's pending passes must have completed.
+    pub fn refresh_cache(&mut self) -> Result<()> {
+        self.refresh()
+    }
+
+    /// Wall time of the last cache warm-up in seconds (0 without a cache).
+    pub fn warmup_seconds(&self) -> f64 {
+        self.warmup_seconds
+    }
+
+    /// The AOV planes the session's integrator writes (empty for `direct`).
+    pub fn aov_planes(&self) -> &'static [&'static str] {
+        self.aov_planes
+    }
+
+    /// From the next pass on, also resolves AOV plane `plane` into the host's `target` (same
+    /// contract as the beauty's). The host's pending passes must have completed.
+    pub fn add_aov_target(&mut self, plane: &str, target: TargetImage) -> Result<()> {
+        let index = self
+            .aov_planes
+            .iter()
+            .position(|p| *p == plane)
+            .ok_or_else(|| {
+                Error::Invalid(format!(
+                    "AOV plane {plane:?}: the {} integrator writes {}",
+                    self.integrator,
+                    if self.aov_planes.is_empty() {
+                        "none".to_string()
+                    } else {
+                        self.aov_planes.join(", ")
+                    }
+                ))
+            })? as u32;
+        if self.aov_targets.iter().any(|t| t.0 == index) {
+            return Err(Error::Invalid(format!(
+                "AOV plane {plane:?} already has a target"
+            )));
+        }
+        check_extent(&self.camera, &target)
+            .map_err(|e| Error::Invalid(format!("AOV plane {plane:?}: {e}")))?;
+        let aovs = self
+            .aovs
+            .as_ref()
+            .expect("an integrator with planes has the buffer");
+        let resolve = ComputePipeline::new(
+            &self.ctx,
+            "resolve_aov",
+            crate::shaders::RESOLVE_AOV_PLAIN,
+            &[
+                (BINDING_AOVS, vk::DescriptorType::STORAGE_BUFFER),
+                (BINDING_IMAGE, vk::DescriptorType::STORAGE_IMAGE),
+            ],
+            32,
+            &[],
+        )?;
+        resolve.bind_buffer(BINDING_AOVS, vk::DescriptorType::STORAGE_BUFFER, aovs);
+        resolve.bind_storage_image(BINDING_IMAGE, target.view);
+        self.aov_targets.push((index, target, resolve));
+        Ok(())
     }
 
     /// Samples per pixel in the image after the passes recorded so far.
@@ -240,6 +390,9 @@ impl RenderSession<'_> {
             barrier(dev, cmd);
             if restart {
                 dev.cmd_fill_buffer(cmd, self.film.buffer, 0, vk::WHOLE_SIZE, 0);
+                if let Some(a) = &self.aovs {
+                    dev.cmd_fill_buffer(cmd, a.buffer, 0, vk::WHOLE_SIZE, 0);
+                }
             }
             dev.cmd_update_buffer(
                 cmd,
@@ -275,6 +428,16 @@ impl RenderSession<'_> {
                 [w.div_ceil(WORKGROUP_X), h.div_ceil(WORKGROUP_Y), 1],
             );
             image_barrier(dev, cmd, t.image, &GENERAL_WRITE, &t.after);
+            let planes = self.aov_planes.len() as u32;
+            for (plane, t, resolve) in &self.aov_targets {
+                image_barrier(dev, cmd, t.image, &t.before, &GENERAL_WRITE);
+                resolve.dispatch(
+                    cmd,
+                    bytemuck::bytes_of(&[w, h, end, 0u32, *plane, planes, 0, 0]),
+                    [w.div_ceil(WORKGROUP_X), h.div_ceil(WORKGROUP_Y), 1],
+                );
+                image_barrier(dev, cmd, t.image, &GENERAL_WRITE, &t.after);
+            }
         }
         self.samples = end;
         Ok(())

@@ -166,6 +166,9 @@ pub struct IntegratorSettings {
     /// `full`: indirect diffuse through the radiosity cache (false: by brute force, the same
     /// partition without the cache, to measure its bias and gain).
     pub radiosity_cache: bool,
+    /// `full`: new cache generations during the render, at samples 1, 2, 4, … (false: the
+    /// warm-up's table serves every sample, as in a render session; src/render/session.rs).
+    pub radiosity_refresh: bool,
     pub technique: Technique,
     /// Most light samples per light and camera sample; each light takes
     /// ceil(its solid-angle share of the hemisphere × this), at least 1 (the course's rule).
@@ -211,6 +214,7 @@ impl Default for IntegratorSettings {
             max_depth: -1,
             specular_depth: 4,
             radiosity_cache: true,
+            radiosity_refresh: true,
             technique: Technique::Mis,
             light_samples: 4,
             brdf_samples: 2,

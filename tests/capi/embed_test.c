@@ -1,8 +1,10 @@
 /* The C API end to end, as a C or C++ engine uses it (run by tests/capi.rs): its own instance
- * (validation on, every message fails), a device created with what illum_requirements asks for,
- * a scene from JSON, prepare, blocking render, an update, and a pass recorded into the host's own
- * command buffer and image, which must equal the blocking render bit for bit. Exit 0 on success. */
-#include "illum.h"
+ * (validation on, every message fails) and a device created with what illum_requirements asks
+ * for (examples/embed_host.h), a scene from JSON and the same scene built in code (meshes and
+ * textures from host memory), prepare, blocking render, an update, a pass recorded into the
+ * host's own command buffer and image, which must equal the blocking render bit for bit, and a
+ * panic inside illum that comes back as an error code. Exit 0 on success. */
+#include "embed_host.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -10,7 +12,6 @@
 #include <string.h>
 
 static int failures = 0;
-static int validation_messages = 0;
 
 #define CHECK(cond, ...)                                                   \
     do {                                                                   \
@@ -22,16 +23,6 @@ static int validation_messages = 0;
         }                                                                  \
     } while (0)
 #define OK(call) CHECK((call) == ILLUM_STATUS_OK, "%s", illum_last_error())
-#define VK(call) CHECK((call) == VK_SUCCESS, "Vulkan call failed")
-
-static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(
-    VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT types,
-    const VkDebugUtilsMessengerCallbackDataEXT *data, void *user) {
-    (void)severity; (void)types; (void)user;
-    fprintf(stderr, "[validation] %s\n", data->pMessage);
-    validation_messages++;
-    return VK_FALSE;
-}
 
 static const char *SCENE =
     "{\"camera\": {\"position\": [0, 1.2, 3], \"look_at\": [0, 0.3, 0], \"fov_y\": 40, \"resolution\": [13, 9]},"
@@ -45,59 +36,71 @@ static const char *SCENE =
 enum { W = 13, H = 9, SPP = 4 };
 static const uint64_t SEED = 11;
 
-static uint32_t memory_type(VkPhysicalDevice pd, uint32_t bits, VkMemoryPropertyFlags want) {
-    VkPhysicalDeviceMemoryProperties p;
-    vkGetPhysicalDeviceMemoryProperties(pd, &p);
-    for (uint32_t i = 0; i < p.memoryTypeCount; i++)
-        if ((bits & (1u << i)) && (p.memoryTypes[i].propertyFlags & want) == want) return i;
-    return 0;
+/* SCENE built in code; with `textured`, the card takes a 2x2 texture of `channels` floats a texel
+ * through uvs (and has normals). NULL on error (illum_last_error says why). */
+static IllumScene *build_scene(int textured, int channels) {
+    const double position[3] = {0, 1.2, 3}, look_at[3] = {0, 0.3, 0};
+    IllumSceneBuilder *b = NULL;
+    IllumScene *scene = NULL;
+    if (illum_scene_builder_create(position, look_at, 40, W, H, &b) != ILLUM_STATUS_OK) return NULL;
+    const float positions[] = {-0.4f, 0, 0, 0.4f, 0, 0, 0.4f, 0.8f, 0, -0.4f, 0.8f, 0};
+    const float normals[] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+    const float uvs[] = {0, 0, 1, 0, 1, 1, 0, 1};
+    const uint32_t indices[] = {0, 1, 2, 0, 2, 3};
+    const double move[16] = {1, 0, 0, -0.2, 0, 1, 0, 0, 0, 0, 1, 0.2, 0, 0, 0, 1};
+    const float texels[] = {1, 0.2f, 0.2f, 1, 0.2f, 1, 0.2f, 1, 0.2f, 0.2f, 1, 1, 1, 1, 1, 1};
+    float rgb[12];
+    for (int i = 0; i < 4; i++) memcpy(&rgb[3 * i], &texels[4 * i], 12);
+    int ok = illum_scene_builder_material(b, "floor", "{\"diffuse\": [0.6, 0.6, 0.6]}") == ILLUM_STATUS_OK
+        && illum_scene_builder_material(b, "card", textured
+               ? "{\"diffuse\": [0.2, 0.5, 0.7], \"diffuse_texture\": \"checker\"}"
+               : "{\"diffuse\": [0.2, 0.5, 0.7]}") == ILLUM_STATUS_OK
+        && illum_scene_builder_shape(b, "floor", "{\"rect\": {\"center\": [0, 0, 0], \"normal\": [0, 1, 0],"
+               " \"size\": [6, 6]}, \"material\": \"floor\"}") == ILLUM_STATUS_OK
+        && illum_scene_builder_mesh(b, "card", "card", positions, textured ? normals : NULL,
+               textured ? uvs : NULL, 4, indices, 6, move) == ILLUM_STATUS_OK
+        && illum_scene_builder_light(b, "key", "{\"rect\": {\"center\": [1, 2, 1], \"normal\": [-0.4, -1, -0.4],"
+               " \"size\": [0.8, 0.8]}, \"intensity\": 6}") == ILLUM_STATUS_OK
+        && illum_scene_builder_light(b, "sky", "{\"dome\": {}, \"color\": [0.2, 0.3, 0.4]}") == ILLUM_STATUS_OK
+        && (!textured || illum_scene_builder_texture(b, "checker", 2, 2, (uint32_t)channels,
+               channels == 3 ? rgb : texels, 0) == ILLUM_STATUS_OK)
+        && illum_scene_builder_build(b, &scene) == ILLUM_STATUS_OK;
+    illum_scene_builder_destroy(b);
+    return ok ? scene : NULL;
+}
+
+/* Bad input to the builder: a status and a message naming the object and field. */
+static void check_builder_errors(void) {
+    const double position[3] = {0, 0, 3}, look_at[3] = {0, 0, 0};
+    IllumSceneBuilder *b = NULL;
+    OK(illum_scene_builder_create(position, look_at, 40, 8, 8, &b));
+    const float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const uint32_t indices[] = {0, 1, 7};
+    const float pixels[] = {1, 1, 1, 1};
+    CHECK(illum_scene_builder_texture(b, "t", 1, 1, 2, pixels, 0) == ILLUM_STATUS_ERROR_INVALID, "2 channels");
+    CHECK(strstr(illum_last_error(), "textures.t.pixels") != NULL, "message: %s", illum_last_error());
+    CHECK(illum_scene_builder_mesh(b, "m", "m", NULL, NULL, NULL, 3, indices, 3, NULL) == ILLUM_STATUS_ERROR_NULL,
+          "NULL positions");
+    CHECK(strstr(illum_last_error(), "shapes.m.mesh.positions") != NULL, "message: %s", illum_last_error());
+    CHECK(illum_scene_builder_material(b, "m", "{\"diffuse\": [0.5, 0.5]") == ILLUM_STATUS_ERROR_INVALID,
+          "malformed JSON");
+    CHECK(strstr(illum_last_error(), "materials.m") != NULL, "message: %s", illum_last_error());
+    OK(illum_scene_builder_material(b, "m", "{\"diffuse\": [0.5, 0.5, 0.5]}"));
+    OK(illum_scene_builder_mesh(b, "m", "m", positions, NULL, NULL, 3, indices, 3, NULL));
+    IllumScene *scene = NULL;
+    CHECK(illum_scene_builder_build(b, &scene) == ILLUM_STATUS_ERROR_INVALID, "index 7 of 3 vertices");
+    CHECK(strstr(illum_last_error(), "shapes.m.mesh") != NULL, "message: %s", illum_last_error());
+    CHECK(scene == NULL, "no scene on error");
+    illum_scene_builder_destroy(b);
 }
 
 int main(void) {
-    /* The host's instance, with validation and synchronization validation. */
-    const char *layers[] = {"VK_LAYER_KHRONOS_validation"};
-    const char *exts[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
-    VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
-    VkValidationFeaturesEXT features = {VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT, NULL, 1, &sync, 0, NULL};
-    VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO, NULL, "capi test", 1, NULL, 0, VK_API_VERSION_1_2};
-    VkInstanceCreateInfo ici = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, &features, 0, &app, 1, layers, 1, exts};
-    VkInstance instance;
-    if (vkCreateInstance(&ici, NULL, &instance) != VK_SUCCESS) { fprintf(stderr, "no instance\n"); return 2; }
-    PFN_vkCreateDebugUtilsMessengerEXT create_messenger =
-        (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT");
-    PFN_vkDestroyDebugUtilsMessengerEXT destroy_messenger =
-        (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT");
-    VkDebugUtilsMessengerCreateInfoEXT mci = {VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT, NULL, 0,
-        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT,
-        VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-            VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT,
-        on_message, NULL};
-    VkDebugUtilsMessengerEXT messenger;
-    VK(create_messenger(instance, &mci, NULL, &messenger));
-    uint32_t n = 1;
-    VkPhysicalDevice pd;
-    vkEnumeratePhysicalDevices(instance, &n, &pd);
-
-    /* What illum needs, asked; a device created with exactly that. */
-    IllumRequirements req;
-    OK(illum_requirements(vkGetInstanceProcAddr, instance, pd, 0, &req));
+    Host host;
+    if (host_create(&host, 1)) return 2;
+    const IllumRequirements req = host.req;
     CHECK(req.shader_int64 && req.buffer_device_address && req.scalar_block_layout, "base features");
     CHECK(req.extension_count == 0 && !req.ray_query, "the base set has no extension");
-    float prio = 1.0f;
-    VkDeviceQueueCreateInfo qci = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO, NULL, 0, req.queue_family, 1, &prio};
-    VkPhysicalDeviceVulkan12Features f12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    f12.bufferDeviceAddress = req.buffer_device_address;
-    f12.scalarBlockLayout = req.scalar_block_layout;
-    VkPhysicalDeviceFeatures2 f2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
-    f2.features.shaderInt64 = req.shader_int64;
-    VkDeviceCreateInfo dci = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2, 0, 1, &qci, 0, NULL,
-                              req.extension_count, req.extensions, NULL};
-    VkDevice device;
-    if (vkCreateDevice(pd, &dci, NULL, &device) != VK_SUCCESS) { fprintf(stderr, "no device\n"); return 2; }
-    VkQueue queue;
-    vkGetDeviceQueue(device, req.queue_family, 0, &queue);
-
-    IllumExternalDevice ext = {vkGetInstanceProcAddr, instance, pd, device, queue, req.queue_family, 0};
+    IllumExternalDevice ext = host_external(&host);
     IllumContext *ctx = NULL;
     OK(illum_context_from_external(&ext, &ctx));
 
@@ -133,90 +136,72 @@ int main(void) {
     CHECK(strstr(illum_last_error(), "materials.card.diffuse") != NULL, "message: %s", illum_last_error());
     OK(illum_render(ctx, prepared, scene, SPP, SEED, reference, W * H * 3));
 
-    /* The host's storage image, readback buffer, command buffer and fence. */
-    VkImageCreateInfo ii = {VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO, NULL, 0, VK_IMAGE_TYPE_2D,
-        VK_FORMAT_R32G32B32A32_SFLOAT, {W, H, 1}, 1, 1, VK_SAMPLE_COUNT_1_BIT, VK_IMAGE_TILING_OPTIMAL,
-        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_SHARING_MODE_EXCLUSIVE, 0, NULL,
-        VK_IMAGE_LAYOUT_UNDEFINED};
-    VkImage image;
-    VK(vkCreateImage(device, &ii, NULL, &image));
-    VkMemoryRequirements mr;
-    vkGetImageMemoryRequirements(device, image, &mr);
-    VkMemoryAllocateInfo mai = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, NULL, mr.size,
-        memory_type(pd, mr.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)};
-    VkDeviceMemory image_memory, buffer_memory;
-    VK(vkAllocateMemory(device, &mai, NULL, &image_memory));
-    VK(vkBindImageMemory(device, image, image_memory, 0));
-    VkImageViewCreateInfo vi = {VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO, NULL, 0, image, VK_IMAGE_VIEW_TYPE_2D,
-        VK_FORMAT_R32G32B32A32_SFLOAT, {0}, {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}};
-    VkImageView view;
-    VK(vkCreateImageView(device, &vi, NULL, &view));
-    VkBufferCreateInfo bi = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, NULL, 0, W * H * 16,
-        VK_BUFFER_USAGE_TRANSFER_DST_BIT, VK_SHARING_MODE_EXCLUSIVE, 0, NULL};
-    VkBuffer readback;
-    VK(vkCreateBuffer(device, &bi, NULL, &readback));
-    vkGetBufferMemoryRequirements(device, readback, &mr);
-    mai.allocationSize = mr.size;
-    mai.memoryTypeIndex = memory_type(pd, mr.memoryTypeBits,
-        VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-    VK(vkAllocateMemory(device, &mai, NULL, &buffer_memory));
-    VK(vkBindBufferMemory(device, readback, buffer_memory, 0));
-    VkCommandPoolCreateInfo pci = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO, NULL, 0, req.queue_family};
-    VkCommandPool pool;
-    VK(vkCreateCommandPool(device, &pci, NULL, &pool));
-    VkCommandBufferAllocateInfo cai = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, NULL, pool,
-        VK_COMMAND_BUFFER_LEVEL_PRIMARY, 1};
-    VkCommandBuffer cmd;
-    VK(vkAllocateCommandBuffers(device, &cai, &cmd));
+    /* The same scene built in code gives the same image, bit for bit. */
+    static float built[W * H * 3];
+    IllumScene *built_scene = build_scene(0, 0);
+    CHECK(built_scene != NULL, "the built scene: %s", illum_last_error());
+    if (built_scene) {
+        IllumPrepared *p = NULL;
+        OK(illum_prepare(ctx, built_scene, &p));
+        OK(illum_render(ctx, p, built_scene, SPP, SEED, built, W * H * 3));
+        CHECK(memcmp(first, built, sizeof first) == 0, "the built scene renders as the JSON scene");
+        illum_prepared_destroy(p);
+        illum_scene_destroy(built_scene);
+    }
+    /* A texture from host pixels: RGB and RGBA (alpha 1) give the same image, and it shows. */
+    static float rgb_texture[W * H * 3], rgba_texture[W * H * 3];
+    for (int channels = 3; channels <= 4; channels++) {
+        IllumScene *t = build_scene(1, channels);
+        CHECK(t != NULL, "the textured scene (%d channels): %s", channels, illum_last_error());
+        if (!t) continue;
+        IllumPrepared *p = NULL;
+        OK(illum_prepare(ctx, t, &p));
+        OK(illum_render(ctx, p, t, SPP, SEED, channels == 3 ? rgb_texture : rgba_texture, W * H * 3));
+        illum_prepared_destroy(p);
+        illum_scene_destroy(t);
+    }
+    CHECK(memcmp(rgb_texture, rgba_texture, sizeof first) == 0, "RGB and RGBA textures agree");
+    CHECK(memcmp(rgb_texture, first, sizeof first) != 0, "the texture shows");
+    check_builder_errors();
+
+    /* A panic inside illum: an error code and its message, and illum goes on working. */
+    CHECK(illum_debug_panic("deliberate") == ILLUM_STATUS_ERROR_PANIC, "the panic's status");
+    CHECK(strstr(illum_last_error(), "panic") && strstr(illum_last_error(), "deliberate"),
+          "message: %s", illum_last_error());
+    static float after_panic[W * H * 3];
+    OK(illum_render(ctx, prepared, scene, SPP, SEED, after_panic, W * H * 3));
+    CHECK(memcmp(after_panic, reference, sizeof first) == 0, "the same render after the panic");
 
     /* One pass of SPP samples into the host's image, copied out in the same command buffer. */
-    IllumTarget target = {image, view, W, H,
-        VK_IMAGE_LAYOUT_UNDEFINED, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-        VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT};
+    HostImage image;
+    CHECK(host_image_create(&host, &image, W, H) == 0, "the host's image");
+    IllumTarget target = host_image_target(&image);
     IllumSession *session = NULL;
-    OK(illum_session_create(ctx, prepared, scene, SEED, &target, &session));
-    VkCommandBufferBeginInfo cbi = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO, NULL,
-        VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT, NULL};
-    VK(vkBeginCommandBuffer(cmd, &cbi));
-    OK(illum_session_record_pass(session, cmd, 0, SPP));
-    VkBufferImageCopy copy = {0, 0, 0, {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1}, {0, 0, 0}, {W, H, 1}};
-    vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback, 1, &copy);
-    VkMemoryBarrier to_host = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, NULL, VK_ACCESS_TRANSFER_WRITE_BIT,
-        VK_ACCESS_HOST_READ_BIT};
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0,
-        NULL, 0, NULL);
-    VK(vkEndCommandBuffer(cmd));
-    VkFenceCreateInfo fci = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    VkFence fence;
-    VK(vkCreateFence(device, &fci, NULL, &fence));
-    VkSubmitInfo si = {VK_STRUCTURE_TYPE_SUBMIT_INFO, NULL, 0, NULL, NULL, 1, &cmd, 0, NULL};
-    VK(vkQueueSubmit(queue, 1, &si, fence));
-    VK(vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX));
-    float *texels;
-    VK(vkMapMemory(device, buffer_memory, 0, W * H * 16, 0, (void **)&texels));
+    CHECK(illum_session_create(ctx, prepared, scene, "nope", SEED, &target, &session) == ILLUM_STATUS_ERROR_INVALID,
+          "an unknown integrator");
+    CHECK(strstr(illum_last_error(), "\"nope\"") != NULL, "message: %s", illum_last_error());
+    OK(illum_session_create(ctx, prepared, scene, NULL, SEED, &target, &session));
+    CHECK(illum_session_add_aov_target(session, "Direct", &target) == ILLUM_STATUS_ERROR_INVALID,
+          "direct has no AOV planes");
+    CHECK(strstr(illum_last_error(), "writes none") != NULL, "message: %s", illum_last_error());
+    OK(illum_session_record_pass(session, host_begin(&host), 0, SPP));
+    CHECK(host_end_and_wait(&host, &image, 1) == 0, "the host's frame");
+    static float texels[W * H * 4];
+    CHECK(host_image_read(&host, &image, texels) == 0, "read back");
     int differing = 0;
     for (int i = 0; i < W * H; i++) {
         if (memcmp(&texels[4 * i], &reference[3 * i], 12) != 0 || texels[4 * i + 3] != 1.0f) differing++;
     }
     CHECK(differing == 0, "%d pixels of the recorded pass differ from the blocking render", differing);
-    vkUnmapMemory(device, buffer_memory);
     illum_session_destroy(session);
 
     illum_prepared_destroy(prepared);
     illum_scene_destroy(scene);
     illum_context_destroy(ctx);
     /* The device is still the host's. */
-    vkDestroyFence(device, fence, NULL);
-    vkDestroyCommandPool(device, pool, NULL);
-    vkDestroyBuffer(device, readback, NULL);
-    vkDestroyImageView(device, view, NULL);
-    vkDestroyImage(device, image, NULL);
-    vkFreeMemory(device, buffer_memory, NULL);
-    vkFreeMemory(device, image_memory, NULL);
-    vkDestroyDevice(device, NULL);
-    destroy_messenger(instance, messenger, NULL);
-    vkDestroyInstance(instance, NULL);
-    CHECK(validation_messages == 0, "%d validation messages", validation_messages);
+    host_image_destroy(&host, &image);
+    host_destroy(&host);
+    CHECK(host_validation_messages == 0, "%d validation messages", host_validation_messages);
     if (failures) { fprintf(stderr, "%d check(s) failed\n", failures); return 1; }
     printf("capi: ok\n");
     return 0;

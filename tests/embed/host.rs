@@ -1,14 +1,15 @@
 //! The host application's side of a frame: its own storage image for illum, a render pass of its
 //! own (a clear of its colour image), a copy of illum's image into a readback buffer, its own
-//! command buffer and fence: everything an engine's frame loop has around `record_pass`.
+//! command buffer and fence: everything an engine's frame loop has around `record_pass`. It may
+//! have several storage images for illum (the beauty, then AOV planes), all copied back.
 
 use ash::vk;
 use illum::render::{ImageState, TargetImage};
 
 pub struct HostFrame {
     device: ash::Device,
-    pub target: vk::Image,
-    pub view: vk::ImageView,
+    /// illum's storage images and their views: the beauty's first.
+    targets: Vec<(vk::Image, vk::ImageView)>,
     color: vk::Image,
     color_view: vk::ImageView,
     render_pass: vk::RenderPass,
@@ -89,6 +90,22 @@ impl HostFrame {
         queue_family: u32,
         extent: [u32; 2],
     ) -> HostFrame {
+        // SAFETY: the caller's contract.
+        unsafe { Self::with_images(instance, pd, device, queue_family, extent, 1) }
+    }
+
+    /// A frame with `images` storage images for illum.
+    ///
+    /// # Safety
+    /// As [`HostFrame::new`].
+    pub unsafe fn with_images(
+        instance: &ash::Instance,
+        pd: vk::PhysicalDevice,
+        device: &ash::Device,
+        queue_family: u32,
+        extent: [u32; 2],
+        images: usize,
+    ) -> HostFrame {
         unsafe {
             let mut memory = Vec::new();
             let mut image = |format, usage| {
@@ -116,10 +133,14 @@ impl HostFrame {
                     .unwrap();
                 (i, v)
             };
-            let (target, view) = image(
-                vk::Format::R32G32B32A32_SFLOAT,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-            );
+            let targets: Vec<_> = (0..images)
+                .map(|_| {
+                    image(
+                        vk::Format::R32G32B32A32_SFLOAT,
+                        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+                    )
+                })
+                .collect();
             let (color, color_view) = image(
                 vk::Format::R8G8B8A8_UNORM,
                 vk::ImageUsageFlags::COLOR_ATTACHMENT,
@@ -127,7 +148,7 @@ impl HostFrame {
             let readback = device
                 .create_buffer(
                     &vk::BufferCreateInfo::default()
-                        .size(u64::from(extent[0] * extent[1]) * 16)
+                        .size(u64::from(extent[0] * extent[1]) * 16 * images as u64)
                         .usage(vk::BufferUsageFlags::TRANSFER_DST),
                     None,
                 )
@@ -203,8 +224,7 @@ impl HostFrame {
                 .unwrap();
             HostFrame {
                 device: device.clone(),
-                target,
-                view,
+                targets,
                 color,
                 color_view,
                 render_pass,
@@ -220,11 +240,16 @@ impl HostFrame {
         }
     }
 
-    /// illum's image as this host uses it: discarded before each pass, copied after.
+    /// illum's (beauty) image as this host uses it: discarded before each pass, copied after.
     pub fn target(&self) -> TargetImage {
+        self.target_at(0)
+    }
+
+    /// Storage image `k` for illum, used as [`HostFrame::target`].
+    pub fn target_at(&self, k: usize) -> TargetImage {
         TargetImage {
-            image: self.target,
-            view: self.view,
+            image: self.targets[k].0,
+            view: self.targets[k].1,
             extent: self.extent,
             before: ImageState {
                 layout: vk::ImageLayout::UNDEFINED,
@@ -243,6 +268,11 @@ impl HostFrame {
     /// then the host copies illum's image for readback; submitted and waited for. Returns the
     /// image's RGBA texels.
     pub fn frame(&self, illum: impl FnOnce(vk::CommandBuffer)) -> Vec<[f32; 4]> {
+        self.frame_all(illum).swap_remove(0)
+    }
+
+    /// [`HostFrame::frame`], returning the texels of every storage image.
+    pub fn frame_all(&self, illum: impl FnOnce(vk::CommandBuffer)) -> Vec<Vec<[f32; 4]>> {
         let d = &self.device;
         // SAFETY: every object is this frame's; the fence wait ends the frame.
         unsafe {
@@ -272,24 +302,28 @@ impl HostFrame {
             );
             d.cmd_end_render_pass(self.cmd);
             illum(self.cmd);
-            d.cmd_copy_image_to_buffer(
-                self.cmd,
-                self.target,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                self.readback,
-                &[vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: self.extent[0],
-                        height: self.extent[1],
-                        depth: 1,
-                    })],
-            );
+            let n = u64::from(self.extent[0] * self.extent[1]);
+            for (k, t) in self.targets.iter().enumerate() {
+                d.cmd_copy_image_to_buffer(
+                    self.cmd,
+                    t.0,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    self.readback,
+                    &[vk::BufferImageCopy::default()
+                        .buffer_offset(k as u64 * n * 16)
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: vk::ImageAspectFlags::COLOR,
+                            mip_level: 0,
+                            base_array_layer: 0,
+                            layer_count: 1,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: self.extent[0],
+                            height: self.extent[1],
+                            depth: 1,
+                        })],
+                );
+            }
             // The copy's writes made visible to the host's read of the mapped buffer.
             let to_host = [vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
@@ -314,11 +348,13 @@ impl HostFrame {
             d.wait_for_fences(&[self.fence], true, u64::MAX).unwrap();
             d.reset_fences(&[self.fence]).unwrap();
             let n = (self.extent[0] * self.extent[1]) as usize;
+            let k = self.targets.len();
             let mem = *self.memory.last().unwrap();
             let p = d
-                .map_memory(mem, 0, (n * 16) as u64, vk::MemoryMapFlags::empty())
+                .map_memory(mem, 0, (k * n * 16) as u64, vk::MemoryMapFlags::empty())
                 .unwrap();
-            let out = std::slice::from_raw_parts(p as *const [f32; 4], n).to_vec();
+            let all = std::slice::from_raw_parts(p as *const [f32; 4], k * n);
+            let out = all.chunks_exact(n).map(<[_]>::to_vec).collect();
             d.unmap_memory(mem);
             out
         }
@@ -335,8 +371,10 @@ impl HostFrame {
             d.destroy_buffer(self.readback, None);
             d.destroy_image_view(self.color_view, None);
             d.destroy_image(self.color, None);
-            d.destroy_image_view(self.view, None);
-            d.destroy_image(self.target, None);
+            for (image, view) in &self.targets {
+                d.destroy_image_view(*view, None);
+                d.destroy_image(*image, None);
+            }
             for m in &self.memory {
                 d.free_memory(*m, None);
             }

@@ -169,6 +169,7 @@ impl IntegratorPasses for FullKernels {
         }
         let c = cache.as_ref().expect("created above");
         c.configure(frame);
+        c.set_refresh(settings.integrator.radiosity_refresh);
         c.reset();
         Ok(())
     }

@@ -26,6 +26,10 @@
 //! bit-identically with the render in one piece (a job starting at sample A replays the updates
 //! of indices below A; updates always cover the whole frame, whatever the crop).
 //!
+//! With `radiosity_refresh` off the warm-up's table serves every sample (no generation during
+//! the render): what a render session does, since its passes run in the host's command buffers
+//! and cannot hand records back to the host mid-frame (src/render/session.rs).
+//!
 //! Bias (§6.4): a lag of ρ^(rounds) of the indirect light after `rounds` generations (the
 //! warm-up takes enough that ρ_max^warmup ≤ 1e-3, at most 64), plus the blur of a cell, which
 //! the cosine-weighted bounce that reads it integrates again. The cache never serves the camera
@@ -37,7 +41,7 @@ use crate::error::{Error, Result};
 use crate::layout::*;
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
 use ash::vk;
-use std::cell::RefCell;
+use std::cell::{self, RefCell};
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -139,6 +143,9 @@ pub struct RadiosityCache {
     update: ComputePipeline,
     table: Buffer,
     rounds_max: u32,
+    /// Whether renders publish generations at samples 1, 2, 4, … (else the warm-up's table
+    /// serves them all).
+    refresh: cell::Cell<bool>,
     state: RefCell<State>,
 }
 
@@ -176,6 +183,7 @@ impl RadiosityCache {
             update,
             table,
             rounds_max,
+            refresh: cell::Cell::new(true),
             state: RefCell::new(State {
                 seed: None,
                 next_index: 0,
@@ -218,6 +226,12 @@ impl RadiosityCache {
         frame.radiosity_mask = self.shape.slots - 1;
     }
 
+    /// Whether the next renders refresh the cache during their samples (RenderSettings'
+    /// `integrator.radiosity_refresh`).
+    pub fn set_refresh(&self, on: bool) {
+        self.refresh.set(on);
+    }
+
     /// Forgets every cell (a new render starts from an empty cache).
     pub fn reset(&self) {
         let mut st = self.state.borrow_mut();
@@ -231,6 +245,11 @@ impl RadiosityCache {
         let mut st = self.state.borrow_mut();
         if st.seed != Some(seed) || st.next_index > first {
             self.warm_up(ctx, &mut st, seed)?;
+        }
+        if !self.refresh.get() {
+            // The warm-up's table serves every sample.
+            st.update_seconds += t0.elapsed().as_secs_f64();
+            return Ok(count);
         }
         while st.next_index < first {
             let i = st.next_index;
