@@ -1,20 +1,26 @@
 //! Control variates (glsl/shared/direct.glsl, TECHNIQUES.md §5): `avgvis` and `loo`.
 //!
-//! * Zero variance: a diffuse plane fully lit by a huge rect, disk or sphere light. Each light
+//! * Zero variance: a diffuse plane fully lit by a huge rect, disk, sphere or triangle light, a
+//!   wide sun, or a rect with a uniform texture (the control's mean radiance). Each light
 //!   sample's diffuse term then has the analytic sum G = rho L E/(pi L), which the control adds
 //!   for every sample, so every camera sample equals G(p) exactly. The lights are so large that
 //!   G varies by less than 1e-4 over the view, and E/(pi L) below the centre is known in closed
-//!   form (rect: corner form factors; disk: R^2/(h^2+R^2); sphere: sin^2 sigma): each pixel equals
+//!   form (rect: corner form factors; disk: R^2/(h^2+R^2); sphere: sin^2 sigma; triangle: Lambert's
+//!   polygon formula in f64; sun: cos theta / pi while the cone is above the horizon): each pixel equals
 //!   rho L E/(pi L) to that precision for every seed, while the plain estimator's pixels scatter.
 //!   The plain estimator's mean matches it too (G is the integral of what g samples).
 //! * Unbiased (loo): block means of independent renders against the plain estimator on a
-//!   penumbra, Welch t-tests with variances from the renders' scatter, Šidák over the blocks.
+//!   penumbra, Welch t-tests with variances from the renders' scatter, Šidák over the blocks; also
+//!   under a rect with a non-uniform texture, whose control uses its mean radiance.
+//! * Lights picked from the light tree take no control (one sample per pick): an image with more
+//!   lights than the loop threshold is bit-identical with and without `--control-variates`.
 
 mod common;
 use common::*;
 use illum::render::{
     ControlVariates, IntegratorSettings, RenderOutput, RenderSettings, Renderer, Technique,
 };
+use illum::scene::{Scene, Texture};
 
 const W: u32 = 24;
 const H: u32 = 16;
@@ -35,24 +41,80 @@ fn settings(cv: ControlVariates, spp: u32) -> RenderSettings {
     }
 }
 
+/// The floor scene with `light` as the only light ("" for none: `shapes` then holds the
+/// emitter), `shapes` more shapes (each ", name: {...}").
+fn floor_scene(light: &str, shapes: &str) -> String {
+    let lights = if light.is_empty() {
+        String::new()
+    } else {
+        format!(
+            r#""key": {{{light}, "color": [{RADIANCE}, {RADIANCE}, {RADIANCE}], "intensity": 1}}"#
+        )
+    };
+    format!(
+        r#"{{"camera": {{"position": [0, 0.3, 0], "look_at": [0, 0, 0], "up": [0, 0, 1], "fov_y": 60, "resolution": [{W}, {H}]}},
+        "materials": {{"m": {{"diffuse": [{ALBEDO}, {ALBEDO}, {ALBEDO}]}}, "e": {{"diffuse": [0, 0, 0], "emission": [{RADIANCE}, {RADIANCE}, {RADIANCE}]}}}},
+        "shapes": {{"floor": {{"rect": {{"center": [0, 0, 0], "normal": [0, 1, 0], "size": [40, 40]}}, "material": "m"}}{shapes}}},
+        "lights": {{{lights}}}}}"#
+    )
+}
+
 fn scene_json(light: &str, occluder: bool) -> String {
     let sphere = if occluder {
         r#", "ball": {"sphere": {"center": [0.35, 0.5, 0], "radius": 0.25}, "material": "m"}"#
     } else {
         ""
     };
-    format!(
-        r#"{{"camera": {{"position": [0, 0.3, 0], "look_at": [0, 0, 0], "up": [0, 0, 1], "fov_y": 60, "resolution": [{W}, {H}]}},
-        "materials": {{"m": {{"diffuse": [{ALBEDO}, {ALBEDO}, {ALBEDO}]}}}},
-        "shapes": {{"floor": {{"rect": {{"center": [0, 0, 0], "normal": [0, 1, 0], "size": [40, 40]}}, "material": "m"}}{sphere}}},
-        "lights": {{"key": {{{light}, "color": [{RADIANCE}, {RADIANCE}, {RADIANCE}], "intensity": 1}}}}}}"#
-    )
+    floor_scene(light, sphere)
+}
+
+/// An emissive triangle at height 1 facing down, centroid above the origin, circumradius 34.64.
+const TRIANGLE: [[f64; 3]; 3] = [[-30.0, 1.0, -17.32], [30.0, 1.0, -17.32], [0.0, 1.0, 34.64]];
+
+fn triangle_shape() -> String {
+    let p = TRIANGLE
+        .map(|v| format!("[{}, {}, {}]", v[0], v[1], v[2]))
+        .join(", ");
+    format!(r#", "tri": {{"mesh": {{"positions": [{p}]}}, "material": "e"}}"#)
+}
+
+/// E / (pi L) at the origin (normal +Y) of the polygon `v` above it (Lambert's formula, f64).
+fn polygon_form_factor(v: &[[f64; 3]]) -> f64 {
+    let q: Vec<glam::DVec3> = v
+        .iter()
+        .map(|p| glam::DVec3::from(*p).normalize())
+        .collect();
+    let mut sum = 0.0;
+    for k in 0..q.len() {
+        let (a, b) = (q[k], q[(k + 1) % q.len()]);
+        let c = a.cross(b);
+        sum += c.length().atan2(a.dot(b)) * c.normalize().y;
+    }
+    sum.abs() / (2.0 * std::f64::consts::PI)
+}
+
+/// The scene of `json` with its light textured by a 2 x 2 bilinear texture of grey `texels`.
+fn textured(json: &str, texels: [f32; 4]) -> Scene {
+    let mut sc = scene(json);
+    let t = texels.map(|v| glam::Vec4::new(v, v, v, 1.0)).to_vec();
+    sc.textures.push(Texture::new("t", 2, 2, t));
+    sc.lights[0].texture = Some(sc.textures.len() as u32 - 1);
+    sc
+}
+
+fn render_scene(
+    renderer: &Renderer,
+    sc: &Scene,
+    s: &RenderSettings,
+    seeds: &[u64],
+) -> Vec<RenderOutput> {
+    renderer
+        .render_seeds(sc, s, seeds, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("render failed: {e}"))
 }
 
 fn render(renderer: &Renderer, json: &str, s: &RenderSettings, seeds: &[u64]) -> Vec<RenderOutput> {
-    renderer
-        .render_seeds(&scene(json), s, seeds, &mut |_, _| {})
-        .unwrap_or_else(|e| panic!("render failed: {e}"))
+    render_scene(renderer, &scene(json), s, seeds)
 }
 
 #[test]
@@ -68,7 +130,30 @@ fn fully_lit_plane_has_zero_variance() {
         let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
         (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * std::f64::consts::PI)
     };
+    // A wide sun (90 degrees across, 2 samples of 4) 30 degrees from the zenith: its cone stays
+    // above the horizon, E = E_perp cos 30. The triangle, like the rect, changes by < 1e-5 over
+    // the view. The textured rect: a uniform 0.7 texture, so its mean radiance is 0.7 L.
+    let sun = r#""sun": {"direction": [0.5, 0.8660254037844386, 0], "angular_diameter": 90}"#;
+    let rect = r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [40, 40]}"#;
     let cases = [
+        (
+            "sun",
+            sun.to_string(),
+            0.8660254037844386 / std::f64::consts::PI,
+            1e-5,
+        ),
+        (
+            "triangle",
+            String::new(),
+            polygon_form_factor(&TRIANGLE),
+            1e-4,
+        ),
+        (
+            "textured rect",
+            rect.to_string(),
+            0.7 * 4.0 * corner(20.0, 20.0),
+            1e-4,
+        ),
         (
             "rect",
             r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [40, 40]}"#.to_string(),
@@ -89,16 +174,21 @@ fn fully_lit_plane_has_zero_variance() {
         ),
     ];
     for (name, light, share, tolerance) in cases {
-        let json = scene_json(&light, false);
+        let sc = match name {
+            "triangle" => scene(&floor_scene("", &triangle_shape())),
+            "textured rect" => textured(&scene_json(&light, false), [0.7; 4]),
+            _ => scene(&scene_json(&light, false)),
+        };
         let expected = ALBEDO * RADIANCE * share;
-        let plain = render(
-            &renderer,
-            &json,
-            &settings(ControlVariates::Off, 2),
-            &[1, 2],
-        );
-        for cv in [ControlVariates::AvgVis, ControlVariates::Loo] {
-            let outs = render(&renderer, &json, &settings(cv, 2), &[3, 4]);
+        // Both forms share G and Lc; the lights added later test one (each render compiles a
+        // kernel: CI time).
+        let forms: &[ControlVariates] = if matches!(name, "rect" | "disk" | "sphere") {
+            &[ControlVariates::AvgVis, ControlVariates::Loo]
+        } else {
+            &[ControlVariates::Loo]
+        };
+        for &cv in forms {
+            let outs = render_scene(&renderer, &sc, &settings(cv, 2), &[3, 4]);
             let mut worst = 0.0f64;
             for o in &outs {
                 for p in &o.film.beauty {
@@ -116,7 +206,12 @@ fn fully_lit_plane_has_zero_variance() {
             );
         }
         // The plain estimator on the same plane: unbiased, but its pixels scatter (the test
-        // above would fail for it).
+        // above would fail for it). Only for the shapes that share one kernel: each new scene
+        // feature costs a kernel compile (CI time).
+        if !matches!(name, "rect" | "disk" | "sphere") {
+            continue;
+        }
+        let plain = render_scene(&renderer, &sc, &settings(ControlVariates::Off, 2), &[1, 2]);
         // Its mean, with the standard error from the scatter of its (independent) pixels.
         let xs: Vec<f64> = plain
             .iter()
@@ -154,33 +249,45 @@ fn leave_one_out_is_unbiased_in_a_penumbra() {
         r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [8, 8]}"#,
         true,
     );
+    // The textured light: a 2 x 2 checker of 1 and 0.1, bilinear (mean 0.55).
+    let scenes = [
+        ("rect", scene(&json)),
+        ("textured rect", textured(&json, [1.0, 0.1, 0.1, 1.0])),
+    ];
     let seeds = |base: u64| (0..16).map(|j| base * 64 + j).collect::<Vec<u64>>();
-    let plain = stats(&render(
-        &renderer,
-        &json,
-        &settings(ControlVariates::Off, 4),
-        &seeds(1),
-    ));
-    let loo = stats(&render(
-        &renderer,
-        &json,
-        &settings(ControlVariates::Loo, 4),
-        &seeds(2),
-    ));
-    let per = 1.0 - (1.0 - 1e-3f64).powf(1.0 / loo.len() as f64);
-    let (mut vp, mut vl) = (0.0, 0.0);
-    for (b, (&(m1, v1), &(m0, v0))) in loo.iter().zip(&plain).enumerate() {
-        let t = t_for(per, welch_dof(&[(v1, 15.0), (v0, 15.0)]));
-        let se = (v1 + v0).sqrt();
-        vp += v0;
-        vl += v1;
-        assert!(
-            (m1 - m0).abs() <= t * se,
-            "loo: block {b}: {m1} vs plain {m0} (t = {:.2}, limit {t:.2})",
-            (m1 - m0) / se
+    for (c, (name, sc)) in scenes.iter().enumerate() {
+        let base = 1 + 2 * c as u64;
+        let plain = stats(&render_scene(
+            &renderer,
+            sc,
+            &settings(ControlVariates::Off, 4),
+            &seeds(base),
+        ));
+        let loo = stats(&render_scene(
+            &renderer,
+            sc,
+            &settings(ControlVariates::Loo, 4),
+            &seeds(base + 1),
+        ));
+        // Šidák over the blocks of both scenes.
+        let per = 1.0 - (1.0 - 1e-3f64).powf(1.0 / (2 * loo.len()) as f64);
+        let (mut vp, mut vl) = (0.0, 0.0);
+        for (b, (&(m1, v1), &(m0, v0))) in loo.iter().zip(&plain).enumerate() {
+            let t = t_for(per, welch_dof(&[(v1, 15.0), (v0, 15.0)]));
+            let se = (v1 + v0).sqrt();
+            vp += v0;
+            vl += v1;
+            assert!(
+                (m1 - m0).abs() <= t * se,
+                "{name} loo: block {b}: {m1} vs plain {m0} (t = {:.2}, limit {t:.2})",
+                (m1 - m0) / se
+            );
+        }
+        eprintln!(
+            "{name}: variance of the block means: loo / plain = {:.3}",
+            vl / vp
         );
     }
-    eprintln!("variance of the block means: loo / plain = {:.3}", vl / vp);
     assert_no_validation_messages(&ctx);
 }
 
@@ -213,5 +320,40 @@ fn fully_shadowed_plane_is_black() {
             );
         }
     }
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn lights_picked_from_the_tree_take_no_control() {
+    // 40 small sphere lights (above the 32-light loop threshold): the light samples pick lights
+    // from the tree, one per sample, where the per-light control does not apply (see
+    // docs/control-variates.md), so the control variates change nothing, bit for bit.
+    let ctx = context();
+    let renderer = Renderer::new(ctx.clone());
+    let lights: Vec<String> = (0..40)
+        .map(|i| {
+            let (x, z) = (f64::from(i % 8) - 3.5, f64::from(i / 8) - 2.0);
+            format!(
+                r#""l{i}": {{"sphere": {{"center": [{x}, 1, {z}], "radius": 0.1}}, "color": [{RADIANCE}, {RADIANCE}, {RADIANCE}]}}"#
+            )
+        })
+        .collect();
+    let json = scene_json(
+        r#""rect": {"center": [0, 1, 0], "normal": [0, -1, 0], "size": [8, 8]}"#,
+        true,
+    )
+    .replace(
+        r#""lights": {"key": "#,
+        &format!(r#""lights": {{{}, "key": "#, lights.join(", ")),
+    );
+    assert!(json.contains("l39"));
+    let sc = scene(&json);
+    let off = render_scene(&renderer, &sc, &settings(ControlVariates::Off, 2), &[7]);
+    // Loo only: avgvis takes the same branch (each render compiles a kernel: CI time).
+    let on = render_scene(&renderer, &sc, &settings(ControlVariates::Loo, 2), &[7]);
+    assert_eq!(
+        on[0].film.beauty, off[0].film.beauty,
+        "tree-picked lights changed"
+    );
     assert_no_validation_messages(&ctx);
 }

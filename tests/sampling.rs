@@ -43,6 +43,7 @@ fn light(kind: u32, p0: [f32; 4], p1: [f32; 4], p2: [f32; 4], two_sided: bool) -
         shape: NONE,
         flags: if two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
         area: 0.0,
+        ..Default::default()
     }
 }
 

@@ -308,28 +308,53 @@ vec3 shadow_group_end(Shading sh, inout Rng rng) {
     return shadow_flush(sh, rng);
 }
 
-// Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped rect, disk or sphere
-// light of uniform radiance L, the N light samples' diffuse terms g_j = (rho/pi) L max(0, n.w_j)
-// / (pdf_j N) (zero where eval_lobes gives zero: below n's or ng's horizon) have the analytic
-// unshadowed sum G = (rho/pi) L light_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
+// Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped light, the N light
+// samples' diffuse terms g_j = (rho/pi) Lc max(0, n.w_j) / (pdf_j N), with Lc a constant control
+// radiance (zero where eval_lobes gives zero: below n's or ng's horizon), have the analytic
+// unshadowed sum G = (rho/pi) Lc control_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
 // normal that differs from ng zeroes samples that G counts). With V_j the shadow rays' answers:
-//   avgvis (the course):  sum_j g_j V_j + a (G - sum_j g_j),  a = visible / traced:
-//     biased (-Cov(a, sum_j g_j)), consistent; zero variance where fully lit.
-//   loo (leave one out):  sum_j [g_j V_j + a_j (G/N - g_j)],  a_j = a without sample j:
+//   avgvis (the course):  sum_j s_j V_j + a (G - sum_j g_j),  a = visible / traced:
+//     biased (-Cov(a, sum_j g_j)), consistent; zero variance where fully lit and s_j = g_j.
+//   loo (leave one out):  sum_j [s_j V_j + a_j (G/N - g_j)],  a_j = a without sample j:
 //     a_j is independent of sample j, so E[a_j (G/N - g_j)] = E[a_j] * 0: unbiased.
-// A sample is "traced" when g_j > 0; a_j = 0 when no other sample was traced; samples with
-// g_j = 0 count in N and take a_j = a. Below, the sums are scalars in units of rho L / pi:
-// sv, so = sum of max(0, n.w_j) / (pdf_j N) over the visible / occluded traced samples (each an
-// estimate of E / L), vis and tr the counts. The specular terms are left as they are.
+// s_j is the sample's own contribution, with the light's true radiance: for an untextured light
+// Lc is that radiance (s_j = g_j on the diffuse part); a textured light uses its mean radiance
+// Lc = GpuLight.mean (5.1 rule 2: any constant control is exact, the mean is the one that cancels
+// most of the variance). A sample is "traced" when g_j > 0; a_j = 0 when no other sample was
+// traced; samples with g_j = 0 count in N and take a_j = a. Below, the sums are scalars in units
+// of rho Lc / pi: sv, so = sum of max(0, n.w_j) / (pdf_j N) over the visible / occluded traced
+// samples (each an estimate of E / Lc), vis and tr the counts. The specular terms are left as
+// they are.
+// Kinds: rect, disk, sphere, triangle (Lambert's polygon formula) and sun (the cap formula with
+// sin^2 sigma = sin^2 theta_s; delta sun: E_perp max(0, n.s), where g_j = G and the control adds
+// nothing). Not covered: the dome (its control would be SH9, 5.6), textured triangles (no mean
+// on the host), lights picked from the tree or the scan (one sample per pick; see
+// docs/control-variates.md).
 bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffuse_mis) {
-    if (l.kind != LIGHT_RECT && l.kind != LIGHT_DISK && l.kind != LIGHT_SPHERE) return false;
-    if (l.texture != NONE || light_self(l)) return false;
+    if (l.kind == LIGHT_DOME || light_self(l)) return false;
+    if (l.kind == LIGHT_TRIANGLE && l.texture != NONE) return false;
     if (technique == TECHNIQUE_BRDF || (technique == TECHNIQUE_MIS && diffuse_mis)) return false;
     return max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0;
 }
 
+// The control's constant radiance Lc (see above): the radiance light_radiance() gives everywhere on
+// an untextured light, the host's exact mean of it on a textured one.
+vec3 control_radiance(GpuLight l) {
+    if (l.kind == LIGHT_SUN) return light_radiance(l, vec2(0.0), l.p1.x <= 0.0);
+    return l.texture == NONE ? l.radiance : l.mean;
+}
+
+// E / Lc, the integral of max(0, n.w) over the light as its sampler covers it.
+float control_irradiance(GpuLight l, vec3 p, vec3 n) {
+    if (l.kind == LIGHT_SUN && l.p1.x > 0.0) {
+        float om = l.p1.x;
+        return irradiance_cap(dot(n, l.p0.xyz), om * (2.0 - om), 1.0 - om);
+    }
+    return light_irradiance(l, p, n);
+}
+
 vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float vis, float tr) {
-    float g = light_irradiance(l, sh.p, sh.n);   // E / L: the expectation of sv + so unshadowed
+    float g = control_irradiance(l, sh.p, sh.n);   // the expectation of sv + so unshadowed
     float a = tr > 0.0 ? vis / tr : 0.0;
     float k;
     if (frame.control_variates == CONTROL_VARIATES_LOO) {
@@ -343,7 +368,7 @@ vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float 
     } else {
         k = a * (g - sv - so);
     }
-    return sh.albedo * l.radiance * (k * INV_PI);
+    return sh.albedo * control_radiance(l) * (k * INV_PI);
 }
 
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
@@ -406,20 +431,20 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 // Divide by the expected count n_l (many lights: the selection probability is in it).
                 vec3 c = f * le / (ls.pdf * n_l);
                 if (cv) {
-                    // g_j / (rho L / pi): the diffuse part of c, zero where eval_lobes is.
+                    // g_j / (rho Lc / pi), zero exactly where eval_lobes (and so c) is. V_j is the
+                    // ray's answer, also where c is 0 (a black texel): V_j must not depend on L.
                     float cs = dot(sh.n, ls.wi);
                     float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
-                    vec3 r = shadowed(sh, ls.wi, ls.dist, c);
                     if (s > 0.0) {
                         cv_tr += 1.0;
-                        if (max(r.r, max(r.g, r.b)) > 0.0) {
+                        if (shadowed(sh, ls.wi, ls.dist, vec3(1.0)).r > 0.0) {
                             cv_vis += 1.0;
                             cv_sv += s;
+                            result += c;
                         } else {
                             cv_so += s;
                         }
                     }
-                    result += r;
                 } else {
                     result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
                 }

@@ -301,6 +301,9 @@ struct GpuLight {
                      // triangle: the GpuInstance index
     uint flags;      // LIGHT_FLAG_*
     float area;      // surface area (rect, disk, sphere, triangle)
+    vec3 mean;       // textured rect, disk, sphere: radiance x the mean of the texture lookup over
+                     // the surface (the control variates' constant radiance), else 0
+    uint pad;
 };
 
 // Importance-sampling tables of a dome's map (src/render/dome.rs builds them;

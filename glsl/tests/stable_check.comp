@@ -35,7 +35,7 @@ layout(scalar, binding = 2) writeonly buffer OutputBlock { Result outputs[]; };
 layout(push_constant) uniform Push { uvec4 pc; };
 
 GpuLight make_light(uint kind, vec4 p0, vec4 p1) {
-    return GpuLight(p0, p1.xyz, 0u, vec4(0.0), vec3(1.0), kind, 0xffffffffu, 0xffffffffu, 0u, 0.0);
+    return GpuLight(p0, p1.xyz, 0u, vec4(0.0), vec3(1.0), kind, 0xffffffffu, 0xffffffffu, 0u, 0.0, vec3(0.0), 0u);
 }
 
 void main() {

@@ -4,6 +4,7 @@
 //! conversion to f32: a scene 1e5 units from the origin keeps the precision of one at the origin.
 
 pub mod dome;
+mod light_mean;
 pub mod light_tree;
 mod lights;
 mod update;
@@ -436,6 +437,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
                     shape: ii as u32,
                     flags: LIGHT_FLAG_GEOMETRY | if m.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
                     area: area as f32,
+                    ..Default::default()
                 });
                 features |= FEATURE_TRIANGLE_LIGHTS;
             }
@@ -505,6 +507,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
             features |= FEATURE_TEXTURES;
         }
 
+        light_mean::set_means(&mut lights, &scene.textures);
         let aabbs: Vec<[f32; 6]> = shapes.iter().map(shape_aabb).collect();
         let light_bvh = lights::build(&lights);
         let mean_texel = |t: u32| light_tree::texture_mean(&scene.textures[t as usize]);
