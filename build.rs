@@ -113,7 +113,12 @@ fn compile(
     );
     opts.set_target_spirv(shaderc::SpirvVersion::V1_5);
     opts.set_source_language(shaderc::SourceLanguage::GLSL);
-    opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    // No spirv-opt: its inlining hands the driver one function holding a copy of every callee per
+    // call site (the full kernel: 2.7 MB) before specialization constants can drop the unused
+    // ones, and lavapipe's SPIR-V-to-NIR step took 3.5 times as long on it; the driver inlines
+    // and optimizes itself, and the kernels run as fast (docs/performance.md, "Kernel
+    // compilation").
+    opts.set_optimization_level(shaderc::OptimizationLevel::Zero);
     opts.set_generate_debug_info();
     opts.set_warnings_as_errors();
     for d in defines {

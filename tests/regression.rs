@@ -18,11 +18,14 @@ const SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 
                "sky": {"dome": {}, "color": [0.2, 0.3, 0.4]}}}"#;
 
 /// (driver substring, trace path, hash), rendered at commit a1b123d, before the render-core
-/// refactor (exact film, render jobs, prepared scenes, the integrator seam), which kept them.
+/// refactor (exact film, render jobs, prepared scenes, the integrator seam), which kept them
+/// (00ad028ea8b00ef7 everywhere). Kernels built without spirv-opt (build.rs, issue 15 item 4)
+/// give the driver other IR, whose code rounds a few results differently: beauty RMSE 9.5e-9 of
+/// a mean of 0.98 (relMSE 4e-16, against the estimate's 1e-2), one new hash on every driver.
 const KNOWN: &[(&str, &str, &str)] = &[
-    ("Mesa 25.", "bvh", "00ad028ea8b00ef7"),
-    ("Mesa 25.", "rayquery", "00ad028ea8b00ef7"),
-    ("Mesa 22.", "bvh", "00ad028ea8b00ef7"),
+    ("Mesa 25.", "bvh", "d03135af01f9572c"),
+    ("Mesa 25.", "rayquery", "d03135af01f9572c"),
+    ("Mesa 22.", "bvh", "d03135af01f9572c"),
 ];
 
 fn film_hash(f: &illum::output::Film) -> String {

@@ -26,12 +26,6 @@
 
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
-// Direction of the camera ray through film position film_uv in [0,1]^2 (primary.comp's).
-vec3 camera_direction(vec2 film_uv) {
-    vec2 ndc = 2.0 * film_uv - 1.0;
-    return normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz - ndc.y * frame.cam_up.xyz);
-}
-
 // Spread angle of a camera ray's cone: one pixel's height.
 float pixel_spread() { return 2.0 * length(frame.cam_up.xyz) / float(frame.height); }
 

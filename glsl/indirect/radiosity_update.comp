@@ -9,6 +9,7 @@
 // host averages the records into the next generation's table.
 #version 460
 #include "indirect.glsl"
+#include "film/film.glsl"
 
 layout(local_size_x = 64) in;
 layout(push_constant, scalar) uniform PassBlock { RadiosityPass pc; };

@@ -210,13 +210,18 @@ const float SHADOW_END_ULPS = 64.0 / 8388608.0;
 vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
     if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
     g_rays += 1u;
-    if (dist == INF) return trace_occluded(sh.origin, w, 0.0, INF, MASK_OCCLUDERS) ? vec3(0.0) : c;
-    vec3 x = sh.p + dist * w;
-    vec3 seg = x - sh.origin;
-    float len = length(seg);
-    float tmax = len * (1.0 - 1e-4) - SHADOW_END_ULPS * max(max_abs(x), max_abs(sh.origin));
-    if (!(tmax > 0.0)) return c;   // nothing fits between them
-    return trace_occluded(sh.origin, seg / len, 0.0, tmax, MASK_OCCLUDERS) ? vec3(0.0) : c;
+    // One trace_occluded call: every call site is a copy of the traversal in the compiled kernel.
+    vec3 dir = w;
+    float tmax = INF;
+    if (dist != INF) {
+        vec3 x = sh.p + dist * w;
+        vec3 seg = x - sh.origin;
+        float len = length(seg);
+        tmax = len * (1.0 - 1e-4) - SHADOW_END_ULPS * max(max_abs(x), max_abs(sh.origin));
+        if (!(tmax > 0.0)) return c;   // nothing fits between them
+        dir = seg / len;
+    }
+    return trace_occluded(sh.origin, dir, 0.0, tmax, MASK_OCCLUDERS) ? vec3(0.0) : c;
 }
 
 // Fewer shadow rays (TECHNIQUES.md 4.2, 4.3). Every candidate (a light or BRDF sample with its

@@ -265,7 +265,7 @@ impl Renderer {
         // Warm-up: one empty dispatch, since drivers may compile the pipeline at its first
         // dispatch (llvmpipe does: up to a second for the integrator), which would otherwise be
         // charged to the first pass and skew the error-against-time curve.
-        let warm = Instant::now();
+        let (warm, warm_cpu) = (Instant::now(), crate::vk::process_cpu_seconds());
         ctx.one_shot(|cmd| {
             kernel.record(
                 cmd,
@@ -276,6 +276,13 @@ impl Renderer {
             )
         })?;
         let warmup_seconds = warm.elapsed().as_secs_f64();
+        if crate::vk::kernel_times() {
+            eprintln!(
+                "illum: warm-up dispatch of {}: {warmup_seconds:.3} s ({:.3} s of process CPU)",
+                integrator.name(),
+                crate::vk::process_cpu_seconds() - warm_cpu
+            );
+        }
         let setup_seconds = t0.elapsed().as_secs_f64();
         // The samples this job renders: its range widened to whole blocks.
         let first = film::block_of(range.0, settings.spp).0;

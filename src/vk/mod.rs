@@ -13,6 +13,6 @@ pub use context::{Context, ContextOptions, ExternalDevice, KernelListener};
 pub use devices::{DeviceInfo, list_devices};
 pub use gpu_allocator::MemoryLocation;
 pub use memory::Buffer;
-pub use pipeline::ComputePipeline;
+pub use pipeline::{ComputePipeline, kernel_times, process_cpu_seconds};
 pub use requirements::{FeatureSet, Requirements, requirements};
 pub use timer::GpuTimer;

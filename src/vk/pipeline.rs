@@ -87,6 +87,7 @@ impl ComputePipeline {
                 .module(module)
                 .name(c"main")
                 .specialization_info(&spec_info);
+            let (t0, cpu0) = (std::time::Instant::now(), process_cpu_seconds());
             let created = dev.create_compute_pipelines(
                 vk::PipelineCache::null(),
                 &[vk::ComputePipelineCreateInfo::default()
@@ -95,6 +96,16 @@ impl ComputePipeline {
                 None,
             );
             dev.destroy_shader_module(module, None);
+            if kernel_times() {
+                eprintln!(
+                    "illum: kernel {name}: {} bytes of SPIR-V, features {:#x}, created in {:.3} s \
+                     ({:.3} s of process CPU)",
+                    spirv.len(),
+                    spec.first().copied().unwrap_or(0),
+                    t0.elapsed().as_secs_f64(),
+                    process_cpu_seconds() - cpu0
+                );
+            }
             p.pipeline = created.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
             let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
             for &(_, ty) in bindings {
@@ -187,6 +198,24 @@ impl ComputePipeline {
             dev.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
         }
     }
+}
+
+/// ILLUM_KERNEL_TIMES=1: each pipeline creation says on stderr how long it took (measuring the
+/// driver's compile time, docs/performance.md).
+pub fn kernel_times() -> bool {
+    std::env::var("ILLUM_KERNEL_TIMES").is_ok_and(|v| v != "0" && !v.is_empty())
+}
+
+/// User plus system CPU seconds of the whole process (all threads): on a loaded machine a
+/// better measure of compile work than wall time.
+pub fn process_cpu_seconds() -> f64 {
+    // SAFETY: getrusage writes the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
+        return 0.0;
+    }
+    let s = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    s(u.ru_utime) + s(u.ru_stime)
 }
 
 impl Drop for ComputePipeline {

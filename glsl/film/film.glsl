@@ -1,0 +1,78 @@
+// The per-sample film bookkeeping of the film kernels (glsl/primary.comp,
+// glsl/indirect/{full,path}.comp): the camera ray, the camera hit's AOVs, the firefly clamp, the
+// non-finite count and the sums with their half-buffer (src/render/film.rs reads them). One copy,
+// so the kernels' films agree by construction.
+#ifndef ILLUM_FILM_GLSL
+#define ILLUM_FILM_GLSL
+
+#include "direct.glsl"
+
+// Direction of the camera ray through film position film_uv in [0,1]^2.
+vec3 camera_direction(vec2 film_uv) {
+    vec2 ndc = 2.0 * film_uv - 1.0;
+    return normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz - ndc.y * frame.cam_up.xyz);
+}
+
+// Sample `sample_index` of pixel pix in pass p: its random numbers and its camera ray's direction d (from
+// frame.cam_origin).
+vec3 film_camera_ray(PassConstants p, uvec2 pix, uint pixel, uint sample_index, out Rng rng) {
+    rng = rng_init(p.seed_lo, p.seed_hi, pixel, sample_index);
+    vec2 film_uv = (vec2(pix) + rng_next2(rng)) / vec2(frame.width, frame.height);
+    return camera_direction(film_uv);
+}
+
+// The camera hit h of ray (o, d): adds its AOVs to acc and returns the emission seen directly
+// (the dome's on a miss). True when the hit has a material: then m and sh are its shading.
+bool film_camera_hit(Hit h, vec3 o, vec3 d, inout FilmPixel acc, out vec3 le, out GpuMaterial m,
+                     out Shading sh) {
+    if (h.kind == HIT_NONE) {
+        le = dome_radiance(d);
+        return false;
+    }
+    Surface s = surface_at(h, o, d);
+    le = surface_emission(s, d);
+    acc.normal += vec4(s.ns, h.t);
+    if (s.material == NONE) {
+        acc.albedo.w += 1.0;
+        return false;
+    }
+    m = get_material(s.material);
+    sh = shading_at(s, m, d);
+    acc.albedo += vec4(sh.albedo, 1.0);
+    return true;
+}
+
+// Optional firefly clamp of the camera hit's direct lighting (hue-preserving, TECHNIQUES 7.6):
+// biased, off by default; acc.beauty.w counts the samples it reduced. A non-finite value is not
+// hidden here: film_add counts it.
+vec3 film_clamp(vec3 direct, inout FilmPixel acc) {
+    float clamp_luminance = frame.clamp_luminance;
+    float y = luminance(direct);
+    if (clamp_luminance > 0.0 && y > clamp_luminance) {
+        direct *= clamp_luminance / y;
+        acc.beauty.w += 1.0;
+    }
+    return direct;
+}
+
+// Adds sample_index `sample_index`'s beauty and directly seen emission le to acc. The one place where
+// non-finite sample_index values are counted, before anything accumulates them: such a sample_index counts as
+// 0 (beauty, emission and the caller's AOVs, which it skips when this returns false).
+bool film_add(inout FilmPixel acc, uint sample_index, vec3 beauty, vec3 le) {
+    // Test hook (RenderSettings::inject_non_finite): every n-th sample_index of each pixel is NaN, so
+    // that tests can check this accounting end to end.
+    uint inject = frame.nan_every;
+    if (inject != 0u && sample_index % inject == 0u) beauty.g = uintBitsToFloat(0x7fc00000u);
+    bool finite = !non_finite(beauty);
+    if (!finite) {
+        acc.emission.w += 1.0;
+        beauty = le = vec3(0.0);
+    }
+    acc.emission.rgb += le;
+    acc.beauty.rgb += beauty;
+    acc.beauty_sq.rgb += beauty * beauty;
+    if ((sample_index & 1u) == 1u) acc.beauty_odd.rgb += beauty;
+    return finite;
+}
+
+#endif
