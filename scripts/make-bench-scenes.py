@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Writes the dome benchmark scenes of issue 15 (docs/performance.md, "Dome sampling"):
 scenes/bench/dome.json (a procedural HDR sky with a small bright sun over diffuse and glossy spheres),
-scenes/bench/rect.json (the same spheres under one rect light, the no-regression check) and the
-map scenes/bench/sky.exr (256x128 lat-long, illum's convention). Re-run after editing:
+scenes/bench/rect.json (the same spheres under one rect light, the no-regression check),
+scenes/bench/lights64.json (the same spheres under 32 sphere and 32 rect lights, issue 15's
+many-light case) and the map scenes/bench/sky.exr (256x128 lat-long, illum's convention). Re-run after editing:
     python3 scripts/make-bench-scenes.py
 """
 import importlib.util
@@ -65,6 +66,27 @@ def scene(lights, description):
             "materials": mats, "shapes": shapes, "lights": lights}
 
 
+def many_lights():
+    """32 small sphere lights and 32 rect lights facing the spheres, on two rings above them."""
+    lights = {}
+    for k in range(64):
+        a = 2 * math.pi * (k + 0.5 * (k // 32)) / 32
+        r, y = (4.0, 4.0) if k % 2 == 0 else (6.5, 5.5)
+        c = [round(x, 4) for x in (r * math.cos(a), y, r * math.sin(a) + 1.0)]
+        col = [round(0.6 + 0.4 * math.cos(a + p), 4) for p in (0, 2.1, 4.2)]
+        power = 0.5 + 1.5 * ((k * 37) % 64) / 63  # assorted, deterministic
+        if k < 32:
+            lights["sphere%02d" % k] = {"sphere": {"center": c, "radius": 0.1},
+                                        "color": col, "intensity": round(30 * power, 4)}
+        else:
+            n = [-x for x in c]
+            n[1] = -c[1]
+            lights["rect%02d" % (k - 32)] = {"rect": {"center": c, "normal": n,
+                                                      "size": [0.4, 0.4]},
+                                             "color": col, "intensity": round(6 * power, 4)}
+    return lights
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     stress.write_exr(os.path.join(OUT, "sky.exr"), W, H, sky)
@@ -74,7 +96,9 @@ def main():
     rect = scene({"key": {"rect": {"center": [-2, 5, 3], "normal": [2, -5, -3], "size": [2, 2]},
                           "color": [1, 0.97, 0.92], "intensity": 20}},
                  "issue 15 rect benchmark: the dome benchmark's spheres under one rect light")
-    for name, s in (("dome", dome), ("rect", rect)):
+    lights64 = scene(many_lights(), "issue 15 many-light benchmark: the dome benchmark's spheres "
+                     "under 32 sphere and 32 rect lights of assorted colours and powers")
+    for name, s in (("dome", dome), ("rect", rect), ("lights64", lights64)):
         with open(os.path.join(OUT, name + ".json"), "w") as f:
             json.dump(s, f, indent=2)
             f.write("\n")

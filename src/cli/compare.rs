@@ -24,6 +24,12 @@ pub struct CompareArgs {
     /// each technique. [default: the one --integrator names]
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = ["direct", "full", "full-nocache", "path"])]
     pub integrators: Vec<String>,
+    /// Sample allocations to compare, comma separated: L/B (light samples / BRDF samples per
+    /// lobe, diffuse MIS as --diffuse-mis says), L/B/dmis (diffuse MIS on) or L/B/nodmis (off),
+    /// e.g. 4/2/nodmis,1/1/dmis: how the defaults were chosen (docs/performance.md). Each renders
+    /// with each technique and integrator. [default: the one the options name]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_samples)]
+    pub samples: Vec<Samples>,
     /// Seconds of rendering per technique or integrator.
     #[arg(long, default_value_t = 5.0)]
     pub time: f64,
@@ -51,6 +57,39 @@ pub struct CompareArgs {
     pub quiet: bool,
 }
 
+/// One sample allocation of `--samples`.
+#[derive(Clone, Debug)]
+pub struct Samples {
+    light: u32,
+    brdf: u32,
+    diffuse_mis: Option<bool>,
+    name: String,
+}
+
+fn parse_samples(s: &str) -> Result<Samples, String> {
+    let bad = || format!("{s:?}: expected L/B, L/B/dmis or L/B/nodmis (L, B in 1..=64)");
+    let parts: Vec<&str> = s.split('/').collect();
+    let count = |p: &str| p.parse::<u32>().ok().filter(|n| (1..=64).contains(n));
+    let (Some(light), Some(brdf)) = (
+        parts.first().and_then(|p| count(p)),
+        parts.get(1).and_then(|p| count(p)),
+    ) else {
+        return Err(bad());
+    };
+    let diffuse_mis = match parts.get(2..) {
+        Some([]) => None,
+        Some(["dmis"]) => Some(true),
+        Some(["nodmis"]) => Some(false),
+        _ => return Err(bad()),
+    };
+    Ok(Samples {
+        light,
+        brdf,
+        diffuse_mis,
+        name: parts.join("-"),
+    })
+}
+
 /// One rendering of the comparison: its name and integrator settings.
 struct Run {
     name: String,
@@ -60,7 +99,9 @@ struct Run {
 fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
     let techniques = match &a.techniques {
         Some(t) => t.clone(),
-        None if a.integrators.is_empty() => vec![Technique::Brdf, Technique::Light, Technique::Mis],
+        None if a.integrators.is_empty() && a.samples.is_empty() => {
+            vec![Technique::Brdf, Technique::Light, Technique::Mis]
+        }
         None => vec![Technique::Mis],
     };
     if techniques.is_empty() {
@@ -72,9 +113,22 @@ fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
     } else {
         a.integrators.iter().map(|s| Some(s.as_str())).collect()
     };
-    for integrator in &integrators {
+    let samples: Vec<Option<&Samples>> = if a.samples.is_empty() {
+        vec![None]
+    } else {
+        a.samples.iter().map(Some).collect()
+    };
+    for (integrator, sa) in integrators
+        .iter()
+        .flat_map(|i| samples.iter().map(move |s| (i, s)))
+    {
         for &t in &techniques {
             let mut it = a.integrator.settings(t, scene);
+            if let Some(sa) = sa {
+                it.light_samples = sa.light;
+                it.brdf_samples = sa.brdf;
+                it.diffuse_mis = sa.diffuse_mis.unwrap_or(it.diffuse_mis);
+            }
             if let Some(spec) = integrator {
                 it.kind = match *spec {
                     "direct" => crate::render::IntegratorKind::Direct,
@@ -83,14 +137,21 @@ fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
                 };
                 it.radiosity_cache = *spec != "full-nocache";
             }
-            let name = match (integrator, techniques.len()) {
+            let mut name = match (integrator, techniques.len()) {
                 (None, _) => t.name().to_string(),
                 (Some(i), 1) => i.to_string(),
                 (Some(i), _) => format!("{i}-{}", t.name()),
             };
+            if let Some(sa) = sa {
+                name = if integrator.is_none() && techniques.len() == 1 {
+                    sa.name.clone()
+                } else {
+                    format!("{name}-{}", sa.name)
+                };
+            }
             if runs.iter().any(|r: &Run| r.name == name) {
                 bail!(
-                    "--techniques, --integrators: {name} is named twice (each renders once, to \
+                    "--techniques, --integrators, --samples: {name} is named twice (each renders once, to \
                      {}-{name}.exr)",
                     a.output.display()
                 );
@@ -190,10 +251,10 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     };
     println!(
         "{:<14} {:>8} {:>10} {:>14} {:>14}",
-        if a.integrators.is_empty() {
-            "technique"
-        } else {
-            "integrator"
+        match (a.integrators.is_empty(), a.samples.is_empty()) {
+            (true, true) => "technique",
+            (false, true) => "integrator",
+            _ => "run",
         },
         "spp",
         "seconds",
@@ -287,4 +348,28 @@ fn variance_map(out: &RenderOutput) -> Vec<f64> {
                 / 3.0
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_samples;
+
+    #[test]
+    fn samples_lists_parse_and_bad_ones_are_named() {
+        let s = parse_samples("4/2").unwrap();
+        assert_eq!(
+            (s.light, s.brdf, s.diffuse_mis, s.name.as_str()),
+            (4, 2, None, "4-2")
+        );
+        let s = parse_samples("1/1/dmis").unwrap();
+        assert_eq!((s.light, s.brdf, s.diffuse_mis), (1, 1, Some(true)));
+        assert_eq!(
+            parse_samples("8/3/nodmis").unwrap().diffuse_mis,
+            Some(false)
+        );
+        for bad in ["", "4", "0/1", "65/1", "4/2/x", "4/2/dmis/1", "a/b"] {
+            let e = parse_samples(bad).unwrap_err();
+            assert!(e.contains(&format!("{bad:?}")), "{bad}: {e}");
+        }
+    }
 }

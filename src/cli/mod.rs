@@ -131,9 +131,10 @@ pub struct IntegratorArgs {
     /// BRDF samples per lobe; 1 to 64.
     #[arg(long, default_value_t = 2)]
     pub brdf_samples: u32,
-    /// Also combine cosine-sampled diffuse BRDF samples by MIS (the course: light samples only).
-    #[arg(long)]
-    pub diffuse_mis: bool,
+    /// Diffuse lobe also by cosine-sampled BRDF samples, combined by MIS (off: light samples only,
+    /// as in the course); `--diffuse-mis` alone is on, `--diffuse-mis=off` off. [default: off]
+    #[arg(long, value_name = "MODE", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = ["on", "off"])]
+    pub diffuse_mis: Option<String>,
     /// direct: direct lighting only; full: direct lighting, indirect diffuse through the radiosity
     /// cache, and reflections (caustics left out); path: brute-force path tracer (all light
     /// paths). [default: the scene's "integrator", else direct]
@@ -197,7 +198,10 @@ impl IntegratorArgs {
             technique,
             light_samples: self.light_samples,
             brdf_samples: self.brdf_samples,
-            diffuse_mis: self.diffuse_mis,
+            diffuse_mis: self
+                .diffuse_mis
+                .as_deref()
+                .map_or(d.diffuse_mis, |v| v == "on"),
             light_selection: self.light_selection,
             shadow_resample: self.shadow_resample,
             shadow_cull: self.shadow_cull,

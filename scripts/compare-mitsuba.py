@@ -1,0 +1,152 @@
+#!/usr/bin/env python3
+"""illum against Mitsuba 3 at equal render time (issue 15; docs/performance.md, "Against Mitsuba 3
+at equal time"). For measurement only: needs the mitsuba package (a venv outside the repo) and a
+release build of illum.
+
+For each scene (an illum scene that scripts/to-mitsuba.py converts, e.g. scenes/bench/mitsuba-*.json):
+1. a reference: Mitsuba for --ref-time seconds (cached in --out);
+2. --rounds rounds, interleaved: Mitsuba for --time seconds, then illum with each option set
+   (`illum render --time T`). relMSE (epsilon 0.01, as src/metrics.rs) against the reference.
+
+Equal time: illum's render time is what it prints as "render X s" (its kernel compilation is
+excluded). Mitsuba renders a sample count calibrated from its previous render of that scene to
+take T seconds; its first (warm-up) render, which includes its JIT compilation, is timed apart and
+not counted. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
+unbiased estimator falls as 1/time). The table gives medians over rounds.
+
+    DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 \\
+      /work/mi-venv/bin/python scripts/compare-mitsuba.py scenes/bench/mitsuba-rect.json \\
+      --time 5 --rounds 3 --set "default=" --set "1/1 dmis=--light-samples 1 --brdf-samples 1 --diffuse-mis"
+"""
+import argparse
+import importlib.util
+import os
+import re
+import shlex
+import statistics
+import subprocess
+import time
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+_spec = importlib.util.spec_from_file_location("to_mitsuba", os.path.join(HERE, "to-mitsuba.py"))
+tm = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(tm)
+
+
+def rgb(path):
+    b = mi.Bitmap(path)
+    names = [b.struct_()[i].name for i in range(b.channel_count())]
+    return np.array(b, dtype=np.float64)[..., [names.index(c) for c in "RGB"]]
+
+
+def relmse(img, ref):
+    ok = np.all(np.isfinite(img), axis=-1)
+    d = img[ok] - ref[ok]
+    return float(np.mean(d * d / (ref[ok] ** 2 + 0.01)))
+
+
+class Mitsuba:
+    def __init__(self, path):
+        self.scene = tm.load(tm.convert(path))
+        w, h = self.scene.sensors()[0].film().size()
+        self.pixels = int(w) * int(h)
+        t = time.time()
+        self.render(1, 0)
+        self.warmup_s = time.time() - t  # includes the JIT compilation
+        self.rate = 1e6  # camera samples/s, refined by each timed render
+        for seconds in (0.3, 1.0, 2.0):  # the first renders carry fixed costs: calibrate thrice
+            self.timed(seconds, 0, None)
+
+    def render(self, spp, seed):
+        img = mi.render(self.scene, spp=spp, seed=seed)
+        dr.eval(img)
+        dr.sync_thread()
+        return img
+
+    def timed(self, seconds, seed, out):
+        spp = max(1, round(seconds * self.rate / self.pixels))
+        t = time.time()
+        img = self.render(spp, seed)
+        wall = time.time() - t
+        self.rate = spp * self.pixels / wall
+        if out:
+            mi.Bitmap(img).write(out)
+        return spp, wall
+
+
+def illum(binary, scene, seconds, seed, options, out):
+    cmd = [binary, "render", scene, "--time", str(seconds), "--spp", "1000000",
+           "--seed", str(seed), "-o", out] + shlex.split(options)
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise SystemExit("illum failed: %s\n%s" % (" ".join(cmd), p.stderr))
+    m = re.search(r"at (\d+) spp in .* render ([0-9.]+) s \(([0-9.]+) M camera samples/s",
+                  p.stderr)
+    if not m:
+        raise SystemExit("cannot read illum's timing line:\n" + p.stderr)
+    return int(m.group(1)), float(m.group(2)), float(m.group(3))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scenes", nargs="+")
+    ap.add_argument("--time", type=float, default=5.0)
+    ap.add_argument("--ref-time", type=float, default=60.0)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--set", action="append", metavar="NAME=OPTIONS",
+                    help="an illum option set (repeatable); default: 'default='")
+    ap.add_argument("--illum", default=os.path.join(HERE, "..", "target", "release", "illum"))
+    ap.add_argument("--out", default="/tmp/compare-mitsuba")
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    a = ap.parse_args()
+    mi.set_variant(a.variant)
+    sets = [s.split("=", 1) for s in (a.set or ["default="])]
+    os.makedirs(a.out, exist_ok=True)
+    print("Mitsuba %s (%s), drjit %s, %d threads; T = %g s, reference %g s, %d rounds"
+          % (mi.__version__, a.variant, dr.__version__, dr.thread_count(), a.time, a.ref_time,
+             a.rounds))
+    for scene in a.scenes:
+        name = os.path.splitext(os.path.basename(scene))[0]
+        m = Mitsuba(scene)
+        ref_path = os.path.join(a.out, name + "-ref.exr")
+        if not os.path.exists(ref_path):
+            spp, wall = m.timed(a.ref_time, 999, ref_path)
+            print("%s: reference %d spp in %.1f s" % (name, spp, wall))
+        ref = rgb(ref_path)
+        rows = {"mitsuba": []}
+        for _ in sets:
+            rows.setdefault(_[0], [])
+        for r in range(a.rounds):
+            out = os.path.join(a.out, "%s-mitsuba-%d.exr" % (name, r))
+            spp, wall = m.timed(a.time, r + 1, out)
+            img = rgb(out)
+            e = relmse(img, ref) * wall / a.time
+            rows["mitsuba"].append((e, spp * m.pixels / wall / 1e6, spp, wall,
+                                    img.mean() / ref.mean()))
+            for label, opts in sets:
+                out = os.path.join(a.out, "%s-%s-%d.exr" % (name, re.sub(r"\W", "_", label), r))
+                spp, secs, rate = illum(a.illum, scene, a.time, r + 1, opts, out)
+                img = rgb(out)
+                e = relmse(img, ref) * secs / a.time
+                rows[label].append((e, rate, spp, secs, img.mean() / ref.mean()))
+        mine = statistics.median(x[0] for x in rows["mitsuba"])
+        print("\n%s (Mitsuba warm-up render incl. JIT: %.2f s)" % (scene, m.warmup_s))
+        print("| renderer / illum options | relMSE at %g s | x Mitsuba | M camera samples/s | spp | mean / ref |"
+              % a.time)
+        print("|---|---|---|---|---|---|")
+        for label, xs in rows.items():
+            e = statistics.median(x[0] for x in xs)
+            opts = dict(sets).get(label, "")
+            print("| %s%s | %.3g (%s) | %.2f | %.2f | %d | %.4f |"
+                  % (label, " `%s`" % opts if opts else "", e,
+                     ", ".join("%.3g" % x[0] for x in xs), e / mine,
+                     statistics.median(x[1] for x in xs), statistics.median(x[2] for x in xs),
+                     statistics.mean(x[4] for x in xs)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
