@@ -325,14 +325,14 @@ fn fully_shadowed_plane_is_black() {
 
 #[test]
 fn lights_picked_from_the_tree_take_no_control() {
-    // 40 small sphere lights (above the 32-light loop threshold): the light samples pick lights
+    // 72 small sphere lights (above the 64-light loop threshold): the light samples pick lights
     // from the tree, one per sample, where the per-light control does not apply (see
     // docs/control-variates.md), so the control variates change nothing, bit for bit.
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
-    let lights: Vec<String> = (0..40)
+    let lights: Vec<String> = (0..72)
         .map(|i| {
-            let (x, z) = (f64::from(i % 8) - 3.5, f64::from(i / 8) - 2.0);
+            let (x, z) = (f64::from(i % 8) - 3.5, 0.5 * f64::from(i / 8) - 2.0);
             format!(
                 r#""l{i}": {{"sphere": {{"center": [{x}, 1, {z}], "radius": 0.1}}, "color": [{RADIANCE}, {RADIANCE}, {RADIANCE}]}}"#
             )
@@ -346,7 +346,7 @@ fn lights_picked_from_the_tree_take_no_control() {
         r#""lights": {"key": "#,
         &format!(r#""lights": {{{}, "key": "#, lights.join(", ")),
     );
-    assert!(json.contains("l39"));
+    assert!(json.contains("l71"));
     let sc = scene(&json);
     let off = render_scene(&renderer, &sc, &settings(ControlVariates::Off, 2), &[7]);
     // Loo only: avgvis takes the same branch (each render compiles a kernel: CI time).

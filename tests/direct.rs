@@ -373,13 +373,13 @@ fn anisotropy_follows_mesh_tangents() {
 
 /// Above DIRECT_LOOP_LIGHTS lights the integrator picks lights by descending the light tree and
 /// BRDF samples find lights through the light BVH: MIS must still agree with light sampling alone.
-/// 40 sphere lights and a small emissive mesh (two triangle lights, in the same tree) over a
+/// 72 sphere lights and a small emissive mesh (two triangle lights, in the same tree) over a
 /// glossy floor.
 #[test]
 fn many_lights_through_the_light_bvh_agree_with_light_sampling() {
     let mut lights = Vec::new();
-    for i in 0..40 {
-        let (x, z) = (0.6 * f64::from(i % 8) - 2.1, 0.6 * f64::from(i / 8) - 1.2);
+    for i in 0..72 {
+        let (x, z) = (0.6 * f64::from(i % 8) - 2.1, 0.3 * f64::from(i / 8) - 1.2);
         lights.push(format!(
             r#""l{i}": {{"sphere": {{"center": [{x}, 1.2, {z}]"radius": 0.1}}, "intensity": {}, "color": [1, {}, 0.8]}}"#,
             2.0 + f64::from(i % 3),

@@ -94,8 +94,8 @@ fn compare(n: usize, w: u32, h: u32, spp_tree: u32, spp_loop: u32) {
 }
 
 #[test]
-fn tree_matches_brute_force_64_lights() {
-    compare(64, 16, 12, 1024, 64);
+fn tree_matches_brute_force_128_lights() {
+    compare(128, 16, 12, 1024, 64);
 }
 
 #[test]

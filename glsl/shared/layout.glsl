@@ -136,7 +136,7 @@
 
 // Lights that direct lighting loops over at every shading point (each with its own sample count);
 // above it, light samples pick lights (FEATURE_MANY_LIGHTS). Measured: docs/performance.md.
-#define DIRECT_LOOP_LIGHTS 32
+#define DIRECT_LOOP_LIGHTS 64
 // How light samples pick lights (Frame.light_select): loop over every light, the former linear
 // scan of a CDF over all lights (kept for comparison), or the light tree (TECHNIQUES.md 2.7).
 #define LIGHT_SELECT_LOOP 0

@@ -152,7 +152,7 @@ pub struct IntegratorArgs {
     /// measure the cache's bias and gain. [default: the scene's, else on]
     #[arg(long, value_name = "MODE", value_parser = ["on", "off"])]
     pub radiosity_cache: Option<String>,
-    /// How light samples pick lights in scenes of more than 32 lights: tree (the light tree), scan
+    /// How light samples pick lights in scenes of more than 64 lights: tree (the light tree), scan
     /// (a linear scan over every light, as before the tree) or loop (every light at every point).
     #[arg(long, value_name = "KIND", default_value = "tree")]
     pub light_selection: crate::render::LightSelection,
