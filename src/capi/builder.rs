@@ -55,13 +55,24 @@ pub unsafe extern "C" fn illum_scene_builder_create(
     })
 }
 
-fn json_def<T: serde::de::DeserializeOwned>(
+/// Adds the object `json` of the scene format's `section` as `name`, through `add`: the body of
+/// the material, shape and light entries.
+unsafe fn add_def<T: serde::de::DeserializeOwned>(
+    builder: *mut IllumSceneBuilder,
+    name: *const c_char,
+    json: *const c_char,
     section: &str,
-    name: &str,
-    json: &str,
-) -> Result<T, Error> {
-    serde_json::from_str(json)
-        .map_err(|e| Error::Invalid(format!("{section}.{name}: {e} (in {json:?})")))
+    add: impl FnOnce(&mut SceneBuilder, &str, T),
+) -> IllumStatus {
+    guard(|| unsafe {
+        let b = handle(builder, "builder")?;
+        let n = str_arg(name, "name")?;
+        let json = str_arg(json, "json")?;
+        let def = serde_json::from_str(json)
+            .map_err(|e| Error::Invalid(format!("{section}.{n}: {e} (in {json:?})")))?;
+        add(&mut b.0, n, def);
+        Ok(())
+    })
 }
 
 /// Adds material `name`: a JSON object of the scene format's "materials" section, e.g.
@@ -72,12 +83,11 @@ pub unsafe extern "C" fn illum_scene_builder_material(
     name: *const c_char,
     json: *const c_char,
 ) -> IllumStatus {
-    guard(|| unsafe {
-        let b = handle(builder, "builder")?;
-        let n = str_arg(name, "name")?;
-        b.0.material(n, json_def("materials", n, str_arg(json, "json")?)?);
-        Ok(())
-    })
+    unsafe {
+        add_def(builder, name, json, "materials", |b, n, d| {
+            b.material(n, d);
+        })
+    }
 }
 
 /// Adds shape `name`: a JSON object of the scene format's "shapes" section (sphere, rect, disk;
@@ -88,15 +98,11 @@ pub unsafe extern "C" fn illum_scene_builder_shape(
     name: *const c_char,
     json: *const c_char,
 ) -> IllumStatus {
-    guard(|| unsafe {
-        let b = handle(builder, "builder")?;
-        let n = str_arg(name, "name")?;
-        b.0.shape(
-            n,
-            json_def::<ShapeDef>("shapes", n, str_arg(json, "json")?)?,
-        );
-        Ok(())
-    })
+    unsafe {
+        add_def(builder, name, json, "shapes", |b, n, d: ShapeDef| {
+            b.shape(n, d);
+        })
+    }
 }
 
 /// Adds light `name`: a JSON object of the scene format's "lights" section.
@@ -106,12 +112,11 @@ pub unsafe extern "C" fn illum_scene_builder_light(
     name: *const c_char,
     json: *const c_char,
 ) -> IllumStatus {
-    guard(|| unsafe {
-        let b = handle(builder, "builder")?;
-        let n = str_arg(name, "name")?;
-        b.0.light(n, json_def("lights", n, str_arg(json, "json")?)?);
-        Ok(())
-    })
+    unsafe {
+        add_def(builder, name, json, "lights", |b, n, d| {
+            b.light(n, d);
+        })
+    }
 }
 
 /// Adds triangle mesh `name` of material `material` from host arrays (copied): `vertex_count`
