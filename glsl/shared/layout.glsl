@@ -377,7 +377,7 @@ struct BvhHeader {
 // Four children's boxes, quantized to 8 bits per plane on a grid over the node's own box (one
 // byte per child in each plane word, so that one 64-byte fetch tests all four): child k's box is
 // origin + step * byte k of lo_*/hi_*, step = 2^(byte a of `scale` - 127) along axis a. An unused
-// slot has link NONE.
+// slot has link NONE. trace_bvh.glsl reads it as 64-bit words by offset: keep the order.
 struct BvhNode {
     vec3 origin;
     uint scale;
@@ -392,17 +392,24 @@ struct BvhNode {
     uint pad1;
 };
 
-// A triangle's object-space vertices gathered in leaf order (no index indirection).
+// A triangle's object-space vertices gathered in leaf order (no index indirection) and its index
+// within its mesh: 40 bytes, which the traversal reads as five 64-bit words. (Single floats: a
+// vec3 would align to 16 bytes in std430, the Rust mirror's reference.)
 struct BvhTriangle {
-    vec3 v0;
+    float x0;
+    float y0;
+    float z0;
+    float x1;
+    float y1;
+    float z1;
+    float x2;
+    float y2;
+    float z2;
     uint prim;            // triangle index within its mesh (Hit.prim)
-    vec3 v1;
-    uint pad0;
-    vec3 v2;
-    uint pad1;
 };
 
-// A top-level leaf: a mesh instance or an analytic shape.
+// A top-level leaf: a mesh instance or an analytic shape (read as 64-bit words by offset, like
+// BvhNode).
 struct BvhInstance {
     vec4 world_to_object[3];  // rows of the inverse of the instance's object-to-world matrix
     uint root;                // link of the mesh's bottom-level root, or BVH_SHAPE

@@ -20,9 +20,13 @@
 #define ILLUM_TRACE_BVH_GLSL
 
 layout(scalar, binding = BINDING_BVH) uniform BvhBlock { BvhHeader bvh; };
-layout(buffer_reference, scalar, buffer_reference_align = 16) readonly buffer BvhNodeRef { BvhNode v[]; };
-layout(buffer_reference, scalar, buffer_reference_align = 16) readonly buffer BvhTriangleRef { BvhTriangle v[]; };
-layout(buffer_reference, scalar, buffer_reference_align = 16) readonly buffer BvhInstanceRef { BvhInstance v[]; };
+// Nodes (BvhNode), triangles (BvhTriangle, 40 bytes) and instances are read as 64-bit words, two
+// fields per load: lavapipe issues one gather, or 8 scalar loads, per word whatever its width, so
+// this halves the loads (1.4-1.5x rays per CPU-second where loads are lane by lane, as in Mesa 22
+// or without AVX-512; the same with AVX-512 gathers: docs/performance.md, "Trace throughput").
+layout(buffer_reference, scalar, buffer_reference_align = 8) readonly buffer BvhWordRef { uint64_t v[]; };
+uvec2 bvh_word(BvhWordRef p, uint i) { return unpackUint2x32(p.v[i]); }
+vec4 bvh_row(BvhWordRef p, uint i) { return uintBitsToFloat(uvec4(bvh_word(p, i), bvh_word(p, i + 1u))); }
 
 // A ray in the space of the level being walked, with what the box and triangle tests reuse.
 struct BvhRay {
@@ -95,9 +99,9 @@ const uint BVH_MARKER = 0xfffffffeu;
 bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_hit, out Hit h) {
     h.t = INF; h.kind = HIT_NONE; h.instance = NONE; h.prim = NONE; h.bary = vec2(0.0);
     if (bvh.root == NONE) return false;
-    BvhNodeRef nodes = BvhNodeRef(bvh.nodes);
-    BvhTriangleRef tris = BvhTriangleRef(bvh.triangles);
-    BvhInstanceRef insts = BvhInstanceRef(bvh.instances);
+    BvhWordRef node_words = BvhWordRef(bvh.nodes);
+    BvhWordRef tri_words = BvhWordRef(bvh.triangles);
+    BvhWordRef inst_words = BvhWordRef(bvh.instances);
     BvhRay world = bvh_ray(o, d);
     BvhRay r = world;
     uint stack[BVH_STACK_SIZE];
@@ -123,20 +127,22 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         }
         if (link != NONE && !bvh_is_leaf(link)) {
             // Child planes: origin + step * q, so t = q * (step / d) + (origin - o) / d.
-            vec3 origin = nodes.v[link].origin;
-            uint e = nodes.v[link].scale;
+            uint base = 8u * link;
+            uvec2 w0 = bvh_word(node_words, base), w1 = bvh_word(node_words, base + 1u);
+            vec3 origin = uintBitsToFloat(uvec3(w0, w1.x));
+            uint e = w1.y;
             vec3 a = uintBitsToFloat(uvec3(e << 23, (e >> 8) << 23, (e >> 16) << 23) & 0x7f800000u) * r.inv_d;
             vec3 b = (origin - r.o) * r.inv_d;
             // Near and far planes by the ray's direction signs.
-            uint lx = nodes.v[link].lo_x, hx = nodes.v[link].hi_x;
-            uint ly = nodes.v[link].lo_y, hy = nodes.v[link].hi_y;
-            uint lz = nodes.v[link].lo_z, hz = nodes.v[link].hi_z;
+            uvec2 px = bvh_word(node_words, base + 4u), py = bvh_word(node_words, base + 5u);
+            uvec2 pz = bvh_word(node_words, base + 6u);
+            uint lx = px.x, hx = px.y, ly = py.x, hy = py.y, lz = pz.x, hz = pz.y;
             vec4 near = max(max(bvh_bytes(a.x >= 0.0 ? lx : hx) * a.x + b.x, bvh_bytes(a.y >= 0.0 ? ly : hy) * a.y + b.y),
                             max(bvh_bytes(a.z >= 0.0 ? lz : hz) * a.z + b.z, vec4(tmin)));
             vec4 far = min(min(bvh_bytes(a.x >= 0.0 ? hx : lx) * a.x + b.x, bvh_bytes(a.y >= 0.0 ? hy : ly) * a.y + b.y),
                            bvh_bytes(a.z >= 0.0 ? hz : lz) * a.z + b.z);
             far = min(far * widen, vec4(tmax));
-            uvec4 l = nodes.v[link].links;
+            uvec4 l = uvec4(bvh_word(node_words, base + 2u), bvh_word(node_words, base + 3u));
             // An unused slot has link NONE (its box, lo 255 > hi 0, can pass the widened test).
             bvec4 hits = bvec4(uvec4(lessThanEqual(near, far)) & uvec4(notEqual(l, uvec4(NONE))));
             vec4 key = mix(vec4(INF), near, hits);
@@ -152,25 +158,27 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
         }
         if (link != NONE && bvh_is_leaf(link) && instance == NONE) {
             // A top-level leaf: one instance or shape.
-            BvhInstance inst = insts.v[bvh_leaf_first(link)];
+            uint base = 8u * bvh_leaf_first(link);
+            uvec2 root_index = bvh_word(inst_words, base + 6u);
+            uint inst_mask = bvh_word(inst_words, base + 7u).x;
             link = NONE;
-            if ((inst.mask & mask) != 0u) {
-                if (inst.root != BVH_SHAPE) {
-                    r = bvh_ray(vec3(dot(inst.world_to_object[0], vec4(o, 1.0)),
-                                     dot(inst.world_to_object[1], vec4(o, 1.0)),
-                                     dot(inst.world_to_object[2], vec4(o, 1.0))),
-                                vec3(dot(inst.world_to_object[0].xyz, d),
-                                     dot(inst.world_to_object[1].xyz, d),
-                                     dot(inst.world_to_object[2].xyz, d)));
-                    instance = inst.index;
+            if ((inst_mask & mask) != 0u) {
+                if (root_index.x != BVH_SHAPE) {
+                    // Rows of world_to_object.
+                    vec4 row0 = bvh_row(inst_words, base), row1 = bvh_row(inst_words, base + 2u);
+                    vec4 row2 = bvh_row(inst_words, base + 4u);
+                    vec4 oh = vec4(o, 1.0);
+                    r = bvh_ray(vec3(dot(row0, oh), dot(row1, oh), dot(row2, oh)),
+                                vec3(dot(row0.xyz, d), dot(row1.xyz, d), dot(row2.xyz, d)));
+                    instance = root_index.y;
                     stack[sp++] = BVH_MARKER;
-                    link = inst.root;
+                    link = root_index.x;
                 } else if (has_feature(FEATURE_SHAPES)) {
-                    float t = intersect_shape(get_shape(inst.index), o, d, tmin, tmax);
+                    float t = intersect_shape(get_shape(root_index.y), o, d, tmin, tmax);
                     if (t < INF) {
                         hit = true;
                         tmax = t;
-                        h.t = t; h.kind = HIT_SHAPE; h.instance = NONE; h.prim = inst.index; h.bary = vec2(0.0);
+                        h.t = t; h.kind = HIT_SHAPE; h.instance = NONE; h.prim = root_index.y; h.bary = vec2(0.0);
                         if (any_hit) return true;
                     }
                 }
@@ -181,10 +189,16 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
             uint k = bvh_leaf_first(link);
             float t;
             vec2 bary;
-            if (bvh_triangle(r, tris.v[k].v0, tris.v[k].v1, tris.v[k].v2, tmin, tmax, t, bary)) {
+            uvec2 t0 = bvh_word(tri_words, 5u * k), t1 = bvh_word(tri_words, 5u * k + 1u);
+            uvec2 t2 = bvh_word(tri_words, 5u * k + 2u), t3 = bvh_word(tri_words, 5u * k + 3u);
+            uvec2 t4 = bvh_word(tri_words, 5u * k + 4u);
+            vec3 v0 = uintBitsToFloat(uvec3(t0, t1.x));
+            vec3 v1 = uintBitsToFloat(uvec3(t1.y, t2));
+            vec3 v2 = uintBitsToFloat(uvec3(t3, t4.x));
+            if (bvh_triangle(r, v0, v1, v2, tmin, tmax, t, bary)) {
                 hit = true;
                 tmax = t;
-                h.t = t; h.kind = HIT_TRIANGLE; h.instance = instance; h.prim = tris.v[k].prim; h.bary = bary;
+                h.t = t; h.kind = HIT_TRIANGLE; h.instance = instance; h.prim = t4.y; h.bary = bary;
                 if (any_hit) return true;
             }
             link = (link & ~BVH_LEAF_FIRST_MASK) == BVH_LEAF_BIT ? NONE : link + 1u - (1u << BVH_LEAF_COUNT_SHIFT);

@@ -37,6 +37,12 @@
 //! A 4-wide node with compressed links (13 words) would save one word per node for about as much
 //! decoding ALU; 8-wide quantized nodes would fetch more words per ray than 4-wide (about 24 words
 //! per node at roughly 9 to 10 visits against 14 at 13).
+//!
+//! Since issue 15 item 5 the kernels read nodes, triangles (40 bytes: the vertices and the mesh
+//! index, no padding) and instances as 64-bit words, two fields per load: 1.4-1.5x rays per
+//! CPU-second where lavapipe loads lane by lane (Mesa 22; Mesa 25 without AVX-512), the same with
+//! AVX-512 gathers, 12 % less BLAS memory. Figures, profile and what was dropped:
+//! docs/performance.md, "Trace throughput (issue 15 item 5)".
 
 pub mod builder;
 pub mod nodes;
@@ -109,13 +115,19 @@ fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize) -> MeshBvh {
         .iter()
         .map(|&t| {
             let [a, b, c] = corners(t as usize);
+            let ([x0, y0, z0], [x1, y1, z1], [x2, y2, z2]) =
+                (a.to_array(), b.to_array(), c.to_array());
             BvhTriangle {
-                v0: a.to_array(),
+                x0,
+                y0,
+                z0,
+                x1,
+                y1,
+                z1,
+                x2,
+                y2,
+                z2,
                 prim: t,
-                v1: b.to_array(),
-                pad0: 0,
-                v2: c.to_array(),
-                pad1: 0,
             }
         })
         .collect();
