@@ -1,0 +1,230 @@
+//! The dome's radiance projected on real spherical harmonics of order 2 (SH9), in world
+//! directions: the control radiance L_SH of the dome's control variate (TECHNIQUES.md 5.1 rule 2,
+//! 5.6; glsl/shared/irradiance.glsl `sh9_*`).
+//!
+//! L_lm = ∫ L(w) Y_lm(w) dω over the sphere, with L what the renderer looks up
+//! (src/scene/dome_map.rs: the convention's map, filter, wrap and the rotation about +Y, the
+//! reference of glsl/shared/dome_map.glsl), integrated over the map: dω = J du dv with J the
+//! convention's Jacobian. The lookup is a polynomial of degree ≤ 1 in u and in v between its
+//! breakpoints (texel edges and centres; Mitsuba's rows at j/(H − 1)), split further into at
+//! least 64 cells per axis; the quadrature takes Gauss-Legendre points in each cell, 3×3 up to
+//! about 1 M points, 2×2 up to about 4 M, 1 (the midpoint) above. On a constant 8×8 lat-long map
+//! the other bands come out below 1e-11 of L_00; the midpoint rule's error is ~(π/2H)²/24 (1e-7
+//! at H = 1024). pbrt's octahedral square has creases along its diagonals inside cells: 1e-7 on
+//! the same 8×8 map.
+//!
+//! Precision only decides how much variance the control removes: the control stays exact for
+//! any coefficients, because the kernel's G is the SH9 irradiance of the same L_SH that its
+//! samples evaluate (Funk-Hecke: exact for a band-limited function).
+
+use crate::scene::dome_map;
+use crate::scene::{DomeConvention, Texture};
+use glam::{DVec2, DVec3};
+use std::f64::consts::PI;
+
+/// Real SH basis Y_lm(d) of a unit direction, order 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22, with
+/// (x, y, z) the world axes (the same as `sh9_basis` in glsl/shared/irradiance.glsl).
+pub fn basis(d: DVec3) -> [f64; 9] {
+    let (x, y, z) = (d.x, d.y, d.z);
+    [
+        0.282_094_791_773_878_1,
+        0.488_602_511_902_919_9 * y,
+        0.488_602_511_902_919_9 * z,
+        0.488_602_511_902_919_9 * x,
+        1.092_548_430_592_079_2 * x * y,
+        1.092_548_430_592_079_2 * y * z,
+        0.315_391_565_252_520_05 * (3.0 * z * z - 1.0),
+        1.092_548_430_592_079_2 * x * z,
+        0.546_274_215_296_039_6 * (x * x - y * y),
+    ]
+}
+
+/// L_SH(d) = Σ L_lm Y_lm(d) (the tests' reference of `sh9_eval`).
+#[cfg(test)]
+pub fn eval(c: &[DVec3; 9], d: DVec3) -> DVec3 {
+    basis(d).iter().zip(c).map(|(y, c)| *c * *y).sum()
+}
+
+#[cfg(test)]
+/// ∫ L_SH(w) max(0, n·w) dω = Σ A_l L_lm Y_lm(n), A = π, 2π/3, π/4 (Ramamoorthi & Hanrahan 2001).
+pub fn irradiance(c: &[DVec3; 9], n: DVec3) -> DVec3 {
+    const BAND: [usize; 9] = [0, 1, 1, 1, 2, 2, 2, 2, 2];
+    let a = [PI, 2.0 * PI / 3.0, PI / 4.0];
+    basis(n)
+        .iter()
+        .zip(c)
+        .zip(BAND)
+        .map(|((y, c), l)| *c * (a[l] * y))
+        .sum()
+}
+
+/// Breakpoints of the convention's lookup along one axis of n texels in [0, 1], sorted.
+fn breakpoints(n: u32, extra_rows: Option<u32>) -> Vec<f64> {
+    let mut b: Vec<f64> = (0..=2 * u64::from(n))
+        .map(|k| k as f64 / (2.0 * f64::from(n)))
+        .collect();
+    if let Some(m) = extra_rows.filter(|&m| m > 0) {
+        b.extend((0..=m).map(|j| f64::from(j) / f64::from(m)));
+    }
+    b.sort_by(f64::total_cmp);
+    b.dedup_by(|a, b| (*a - *b).abs() < 1e-15);
+    // At least 64 cells: the smooth factors vary too much over a small map's texels.
+    let split = 64usize.div_ceil(b.len() - 1);
+    let mut out = Vec::with_capacity((b.len() - 1) * split + 1);
+    for w in b.windows(2) {
+        out.extend((0..split).map(|k| w[0] + (w[1] - w[0]) * k as f64 / split as f64));
+    }
+    out.push(1.0);
+    out
+}
+
+/// SH9 coefficients (RGB, `radiance` ⊙ texture) of a dome whose map `t` covers the sphere as
+/// `convention` says, rotated by `rotation_deg` about +Y.
+pub fn project(
+    t: &Texture,
+    radiance: DVec3,
+    convention: DomeConvention,
+    rotation_deg: f64,
+) -> [DVec3; 9] {
+    let mitsuba_rows = (convention == DomeConvention::Mitsuba).then(|| t.height.saturating_sub(1));
+    let (bu, bv) = (
+        breakpoints(t.width, None),
+        breakpoints(t.height, mitsuba_rows),
+    );
+    let cells = (bu.len() - 1) * (bv.len() - 1);
+    let g2 = 0.5 / 3f64.sqrt();
+    let g3 = 0.5 * 0.6f64.sqrt();
+    let rule: &[(f64, f64)] = if cells * 9 <= 1 << 20 {
+        &[
+            (0.5 - g3, 5.0 / 18.0),
+            (0.5, 4.0 / 9.0),
+            (0.5 + g3, 5.0 / 18.0),
+        ]
+    } else if cells * 4 <= 1 << 22 {
+        &[(0.5 - g2, 0.5), (0.5 + g2, 0.5)]
+    } else {
+        &[(0.5, 1.0)]
+    };
+    let mut c = [DVec3::ZERO; 9];
+    for v in bv.windows(2) {
+        let dv = v[1] - v[0];
+        for u in bu.windows(2) {
+            let du = u[1] - u[0];
+            for &(a, wa) in rule {
+                for &(b, wb) in rule {
+                    let uv = DVec2::new(u[0] + a * du, v[0] + b * dv);
+                    let (d, jacobian) = dome_map::direction(convention, rotation_deg, uv);
+                    let l = dome_map::lookup(t, convention, uv).truncate() * radiance;
+                    let w = jacobian * du * dv * wa * wb;
+                    for (ck, y) in c.iter_mut().zip(basis(d)) {
+                        *ck += l * (w * y);
+                    }
+                }
+            }
+        }
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::TextureFilter;
+    use glam::Vec4;
+
+    const CONVENTIONS: [DomeConvention; 3] = [
+        DomeConvention::Illum,
+        DomeConvention::Mitsuba,
+        DomeConvention::Pbrt,
+    ];
+
+    #[test]
+    fn constant_map_projects_on_the_constant_band_only() {
+        // ∫ L Y_00 dω = L √(4π); every other band integrates to 0.
+        for conv in CONVENTIONS {
+            for filter in [TextureFilter::Bilinear, TextureFilter::Nearest] {
+                let mut t = Texture::new("c", 8, 8, vec![Vec4::splat(0.7); 64]);
+                t.filter = filter;
+                let c = project(&t, DVec3::new(1.0, 2.0, 3.0), conv, 37.0);
+                let l00 = DVec3::new(1.0, 2.0, 3.0) * f64::from(0.7f32) * (4.0 * PI).sqrt();
+                let tol = if conv == DomeConvention::Pbrt {
+                    1e-7
+                } else {
+                    1e-11
+                };
+                assert!(
+                    ((c[0] - l00) / l00).abs().max_element() < tol,
+                    "{conv:?} {filter:?}: {} vs {l00}",
+                    c[0]
+                );
+                for (k, ck) in c.iter().enumerate().skip(1) {
+                    assert!(
+                        (*ck / l00).abs().max_element() < tol,
+                        "{conv:?} {filter:?}: c[{k}] = {ck}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn band_one_points_at_a_bright_texel_through_the_convention_and_rotation() {
+        // One bright texel of a 16×8 map (nearest): L ≈ δ toward its centre, so (L11, L1-1, L10)
+        // ∝ (x, y, z) of the direction dome_map gives that centre (its mean over the texel).
+        for conv in CONVENTIONS {
+            let (w, h) = if conv == DomeConvention::Pbrt {
+                (16, 16)
+            } else {
+                (16, 8)
+            };
+            let (i, j) = (5u32, 2u32);
+            let mut texels = vec![Vec4::ZERO; (w * h) as usize];
+            texels[(j * w + i) as usize] = Vec4::ONE;
+            let mut t = Texture::new("hot", w, h, texels);
+            t.filter = TextureFilter::Nearest;
+            let c = project(&t, DVec3::ONE, conv, 37.0);
+            let axis = DVec3::new(c[3].x, c[1].x, c[2].x).normalize();
+            // Mitsuba's lookup is bilinear between texel centres: its bright patch is centred on
+            // the texel centre, at v = j / (H - 1).
+            let centre = match conv {
+                DomeConvention::Mitsuba => {
+                    DVec2::new((i as f64 + 0.5) / w as f64, j as f64 / (h - 1) as f64)
+                }
+                _ => DVec2::new((i as f64 + 0.5) / w as f64, (j as f64 + 0.5) / h as f64),
+            };
+            let (d, _) = dome_map::direction(conv, 37.0, centre);
+            assert!(axis.dot(d) > 0.995, "{conv:?}: {axis} vs {d}");
+        }
+    }
+
+    #[test]
+    fn irradiance_is_the_clamped_cosine_integral_of_the_sh_function() {
+        // Funk-Hecke: for arbitrary coefficients, the closed form equals ∫ L_SH max(0, n·w) dω
+        // by a fine f64 quadrature in (cos θ, φ) about +Z (midpoint, 800 × 1600).
+        let mut c = [DVec3::ZERO; 9];
+        for (k, ck) in c.iter_mut().enumerate() {
+            let x = k as f64;
+            *ck = DVec3::new((1.3 * x).sin(), (0.7 * x + 1.0).cos(), 0.2 * x - 0.5);
+        }
+        for n in [
+            DVec3::Y,
+            DVec3::new(0.3, -0.5, 0.8).normalize(),
+            DVec3::new(-0.9, 0.1, -0.2).normalize(),
+        ] {
+            let (nu, np) = (800, 1600);
+            let mut sum = DVec3::ZERO;
+            for a in 0..nu {
+                let z = -1.0 + 2.0 * (a as f64 + 0.5) / nu as f64;
+                let s = (1.0 - z * z).sqrt();
+                for b in 0..np {
+                    let phi = 2.0 * PI * (b as f64 + 0.5) / np as f64;
+                    let w = DVec3::new(s * phi.cos(), s * phi.sin(), z);
+                    sum += eval(&c, w) * n.dot(w).max(0.0);
+                }
+            }
+            let quad = sum * (4.0 * PI / (nu * np) as f64);
+            let e = irradiance(&c, n);
+            assert!((quad - e).abs().max_element() < 1e-4, "{n}: {quad} vs {e}");
+        }
+    }
+}
