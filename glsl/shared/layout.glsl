@@ -301,8 +301,8 @@ struct GpuLight {
                      // triangle: the GpuInstance index
     uint flags;      // LIGHT_FLAG_*
     float area;      // surface area (rect, disk, sphere, triangle)
-    vec3 mean;       // textured rect, disk, sphere: radiance x the mean of the texture lookup over
-                     // the surface (the control variates' constant radiance), else 0
+    vec3 mean;       // textured rect, disk, sphere, triangle: radiance x the mean of the texture
+                     // lookup over the surface (the control variates' constant radiance), else 0
     uint pad;
 };
 

@@ -13,7 +13,10 @@
 //! at H = 1024). pbrt's octahedral square has creases along its diagonals inside cells: 1e-7 on
 //! the same 8×8 map.
 //!
-//! Precision only decides how much variance the control removes: the control stays exact for
+//! The projected map is clamped at 4 times its mean luminance (`clamp_luminance`): SH9 smears
+//! a sun over the whole sphere, a control that correlates badly with the samples.
+//!
+//! Precision and clamp only decide how much variance the control removes: the control stays exact for
 //! any coefficients, because the kernel's G is the SH9 irradiance of the same L_SH that its
 //! samples evaluate (Funk-Hecke: exact for a band-limited function).
 
@@ -21,6 +24,10 @@ use crate::scene::dome_map;
 use crate::scene::{DomeConvention, Texture};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
+
+/// The clamp of the projected map's luminance, in multiples of its mean (`clamp_luminance`), by
+/// measurement (docs/control-variates.md): 1, 2, 4 and 8 do alike, no clamp is 2x worse.
+const SH_CLAMP: f64 = 4.0;
 
 /// Real SH basis Y_lm(d) of a unit direction, order 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22, with
 /// (x, y, z) the world axes (the same as `sh9_basis` in glsl/shared/irradiance.glsl).
@@ -56,6 +63,37 @@ pub fn irradiance(c: &[DVec3; 9], n: DVec3) -> DVec3 {
         .zip(BAND)
         .map(|((y, c), l)| *c * (a[l] * y))
         .sum()
+}
+
+/// Rec. 709 luminance, as `luminance()` in glsl/shared/common.glsl.
+fn luminance(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// The most luminance the projection takes of a point of the map: `SH_CLAMP` times the map's
+/// mean (texels weighted by their rows' solid angle). SH9 spreads a small bright source (a sun)
+/// over the whole sphere, and that lobe correlates badly with samples that the table aims at the
+/// source: clamped, the control follows the smooth sky and leaves the sun to the samples.
+fn clamp_luminance(t: &Texture, radiance: DVec3, convention: DomeConvention) -> f64 {
+    let h = f64::from(t.height);
+    let (mut sum, mut weight) = (0.0, 0.0);
+    for j in 0..t.height {
+        let row = match convention {
+            DomeConvention::Pbrt => 1.0,
+            DomeConvention::Mitsuba => (PI * f64::from(j) / (h - 1.0).max(1.0)).sin(),
+            DomeConvention::Illum => (PI * (f64::from(j) + 0.5) / h).sin(),
+        };
+        for i in 0..t.width {
+            let l = t.texel(i64::from(i), i64::from(j)).truncate().as_dvec3() * radiance;
+            sum += row * luminance(l).max(0.0);
+            weight += row;
+        }
+    }
+    if weight > 0.0 && sum > 0.0 {
+        SH_CLAMP * sum / weight
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Breakpoints of the convention's lookup along one axis of n texels in [0, 1], sorted.
@@ -105,6 +143,7 @@ pub fn project(
     } else {
         &[(0.5, 1.0)]
     };
+    let cap = clamp_luminance(t, radiance, convention);
     let mut c = [DVec3::ZERO; 9];
     for v in bv.windows(2) {
         let dv = v[1] - v[0];
@@ -114,7 +153,11 @@ pub fn project(
                 for &(b, wb) in rule {
                     let uv = DVec2::new(u[0] + a * du, v[0] + b * dv);
                     let (d, jacobian) = dome_map::direction(convention, rotation_deg, uv);
-                    let l = dome_map::lookup(t, convention, uv).truncate() * radiance;
+                    let mut l = dome_map::lookup(t, convention, uv).truncate() * radiance;
+                    let lum = luminance(l);
+                    if lum > cap {
+                        l *= cap / lum;
+                    }
                     let w = jacobian * du * dv * wa * wb;
                     for (ck, y) in c.iter_mut().zip(basis(d)) {
                         *ck += l * (w * y);
