@@ -20,8 +20,9 @@
 //! exact for any coefficients, because the kernel's G is the SH9 irradiance of the same L_SH that its
 //! samples evaluate (Funk-Hecke: exact for a band-limited function).
 
+use super::dome::{self, DomeTable};
 use crate::scene::dome_map;
-use crate::scene::{DomeConvention, Texture};
+use crate::scene::{DomeConvention, Light, LightKind, Texture};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
@@ -114,6 +115,19 @@ fn breakpoints(n: u32, extra_rows: Option<u32>) -> Vec<f64> {
     }
     out.push(1.0);
     out
+}
+
+/// The sampling tables of dome light `l` with map `t` (src/gpu_scene/dome.rs) and its SH9
+/// coefficients.
+pub fn table(t: &Texture, l: &Light, convention: DomeConvention) -> DomeTable {
+    let mut table = dome::build(t, l.radiance(), convention);
+    let rotation = match l.kind {
+        LightKind::Dome { rotation_deg, .. } => rotation_deg,
+        _ => 0.0,
+    };
+    let sh = project(t, l.radiance().as_dvec3(), convention, rotation);
+    table.sh = sh.map(|c| c.as_vec3().extend(0.0).to_array());
+    table
 }
 
 /// SH9 coefficients (RGB, `radiance` ⊙ texture) of a dome whose map `t` covers the sphere as

@@ -13,7 +13,7 @@
 //! radiance; the mean is what makes it cancel the most variance.
 
 use crate::layout::{GpuLight, LIGHT_DISK, LIGHT_RECT, LIGHT_SPHERE, NONE};
-use crate::scene::Texture;
+use crate::scene::{Material, Mesh, Scene, Texture};
 use glam::{DVec2, DVec3, Vec3};
 
 /// Sets `GpuLight.mean` (radiance × surface mean of the texture) of textured rect, disk and sphere
@@ -112,6 +112,21 @@ pub fn surface_mean(t: &Texture, kind: Parametrization) -> DVec3 {
     } else {
         DVec3::ZERO
     }
+}
+
+/// `GpuLight.mean` of the emissive triangle `tri` (3 indices) of `mesh` with material `m`:
+/// emission × `triangle_mean` of its emission texture (zero without one).
+pub fn triangle_light_mean(scene: &Scene, mesh: &Mesh, tri: &[u32], m: &Material) -> [f32; 3] {
+    let Some(tex) = m.emission_texture else {
+        return [0.0; 3];
+    };
+    let uv = |k: usize| {
+        mesh.uvs
+            .as_ref()
+            .map_or(DVec2::ZERO, |u| u[tri[k] as usize].as_dvec2())
+    };
+    let mean = triangle_mean(&scene.textures[tex as usize], [uv(0), uv(1), uv(2)]);
+    (m.emission.as_dvec3() * mean).as_vec3().to_array()
 }
 
 /// Mean RGB of `t`'s lookup over a triangle light's surface, whose vertices have texture

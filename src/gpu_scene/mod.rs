@@ -19,7 +19,7 @@ use crate::scene::{
 };
 use crate::vk::{Buffer, Context};
 use ash::vk;
-use glam::{DMat3, DMat4, DVec2, DVec3, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 
 /// Index ranges of one mesh inside the shared vertex and index buffers.
 #[derive(Clone, Copy, Debug)]
@@ -438,22 +438,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
                     shape: ii as u32,
                     flags: LIGHT_FLAG_GEOMETRY | if m.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
                     area: area as f32,
-                    mean: match m.emission_texture {
-                        Some(tex) => {
-                            // The control variate's constant radiance (light_mean.rs).
-                            let uv = |k: usize| {
-                                mesh.uvs
-                                    .as_ref()
-                                    .map_or(DVec2::ZERO, |u| u[tri[k] as usize].as_dvec2())
-                            };
-                            let mean = light_mean::triangle_mean(
-                                &scene.textures[tex as usize],
-                                [uv(0), uv(1), uv(2)],
-                            );
-                            (m.emission.as_dvec3() * mean).as_vec3().to_array()
-                        }
-                        None => [0.0; 3],
-                    },
+                    mean: light_mean::triangle_light_mean(scene, mesh, tri, m),
                     ..Default::default()
                 });
                 features |= FEATURE_TRIANGLE_LIGHTS;
@@ -538,17 +523,8 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
         let dome_table = (dome != NONE)
             .then(|| {
                 let l = &scene.lights[dome_map.0];
-                l.texture.map(|t| {
-                    let t = &scene.textures[t as usize];
-                    let mut table = dome::build(t, l.radiance(), dome_map.1);
-                    let rotation = match l.kind {
-                        LightKind::Dome { rotation_deg, .. } => rotation_deg,
-                        _ => 0.0,
-                    };
-                    let sh = dome_sh::project(t, l.radiance().as_dvec3(), dome_map.1, rotation);
-                    table.sh = sh.map(|c| c.as_vec3().extend(0.0).to_array());
-                    table
-                })
+                l.texture
+                    .map(|t| dome_sh::table(&scene.textures[t as usize], l, dome_map.1))
             })
             .flatten();
         Ok(Host {
