@@ -82,10 +82,18 @@ uint lights_along(vec3 p, vec3 w, out uint ids[DIRECT_MAX_CROSSED]) {
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeSamplingRef { GpuDomeSampling v; };
 
+// Share of a textured dome's samples drawn uniformly over the sphere under control variates
+// (light_sampling.glsl: its SH9 control needs a pdf > 0 everywhere; docs/control-variates.md).
+const float DOME_CV_DEFENSIVE = 0.1;
+
 GpuDomeSampling dome_sampling() {
     GpuDomeSampling d;
-    d.marginal = 0ul; d.conditional = 0ul; d.width = 0u; d.height = 0u; d.integral = 0.0; d.pad = 0u;
-    if (has_feature(FEATURE_DOME) && frame.dome_sampling != 0ul) d = DomeSamplingRef(frame.dome_sampling).v;
+    d.marginal = 0ul; d.conditional = 0ul; d.width = 0u; d.height = 0u; d.integral = 0.0; d.defensive = 0.0;
+    for (int k = 0; k < 9; ++k) d.sh[k] = vec4(0.0);
+    if (has_feature(FEATURE_DOME) && frame.dome_sampling != 0ul) {
+        d = DomeSamplingRef(frame.dome_sampling).v;
+        if (has_feature(FEATURE_CONTROL_VARIATES)) d.defensive = DOME_CV_DEFENSIVE;
+    }
     return d;
 }
 
@@ -314,10 +322,12 @@ vec3 shadow_group_end(Shading sh, inout Rng rng) {
 }
 
 // Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped light, the N light
-// samples' diffuse terms g_j = (rho/pi) Lc max(0, n.w_j) / (pdf_j N), with Lc a constant control
+// samples' diffuse terms g_j = (rho/pi) Lc(w_j) max(0, n.w_j) / (pdf_j N), with Lc a control
 // radiance (zero where eval_lobes gives zero: below n's or ng's horizon), have the analytic
-// unshadowed sum G = (rho/pi) Lc control_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
-// normal that differs from ng zeroes samples that G counts). With V_j the shadow rays' answers:
+// unshadowed sum G = (rho/pi) control_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
+// normal that differs from ng zeroes samples that G counts) and the pdf is > 0 wherever
+// Lc max(0, n.w) is not 0. Lc is constant except on a textured dome: its SH9 projection L_SH,
+// G from the SH9 irradiance formula; its sampler then mixes in a uniform share (dome_sampling()). With V_j the shadow rays' answers:
 //   avgvis (the course):  sum_j s_j V_j + a (G - sum_j g_j),  a = visible / traced:
 //     biased (-Cov(a, sum_j g_j)), consistent; zero variance where fully lit and s_j = g_j.
 //   loo (leave one out):  sum_j [s_j V_j + a_j (G/N - g_j)],  a_j = a without sample j:
@@ -325,43 +335,45 @@ vec3 shadow_group_end(Shading sh, inout Rng rng) {
 // s_j is the sample's own contribution, with the light's true radiance: for an untextured light
 // Lc is that radiance (s_j = g_j on the diffuse part); a textured light uses its mean radiance
 // Lc = GpuLight.mean (5.1 rule 2: any constant control is exact, the mean is the one that cancels
-// most of the variance). A sample is "traced" when g_j > 0; a_j = 0 when no other sample was
-// traced; samples with g_j = 0 count in N and take a_j = a. Below, the sums are scalars in units
-// of rho Lc / pi: sv, so = sum of max(0, n.w_j) / (pdf_j N) over the visible / occluded traced
-// samples (each an estimate of E / Lc), vis and tr the counts. The specular terms are left as
-// they are.
+// most of the variance). A sample is "traced" when max(0, n.w_j) / pdf_j > 0 (whatever Lc);
+// a_j = 0 when no other sample was traced; other samples count in N and take a_j = a. Below, the
+// sums are RGB in units of rho / pi: sv, so = sum of Lc(w_j) max(0, n.w_j) / (pdf_j N) over the
+// visible / occluded traced samples (each an estimate of E), vis and tr the counts. The specular
+// terms are left as they are.
 // Kinds: rect, disk, sphere, triangle (Lambert's polygon formula) and sun (the cap formula with
 // sin^2 sigma = sin^2 theta_s; delta sun: E_perp max(0, n.s), where g_j = G and the control adds
-// nothing). Not covered: the dome (its control would be SH9, 5.6), textured triangles (no mean
-// on the host), lights picked from the tree or the scan (one sample per pick; see
-// docs/control-variates.md).
+// nothing) and the dome (5.6; constant: G = pi L). Not covered: lights picked from the tree or
+// the scan (one sample per pick; see docs/control-variates.md).
 bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffuse_mis) {
-    if (l.kind == LIGHT_DOME || light_self(l)) return false;
-    if (l.kind == LIGHT_TRIANGLE && l.texture != NONE) return false;
+    if (light_self(l) || (l.kind == LIGHT_DOME && !has_feature(FEATURE_DOME))) return false;
     if (technique == TECHNIQUE_BRDF || (technique == TECHNIQUE_MIS && diffuse_mis)) return false;
     return max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0;
 }
 
-// The control's constant radiance Lc (see above): the radiance light_radiance() gives everywhere on
-// an untextured light, the host's exact mean of it on a textured one.
-vec3 control_radiance(GpuLight l) {
+// The control radiance Lc toward w (see above): the radiance light_radiance() gives everywhere on
+// an untextured light, the host's exact mean of it on a textured one, L_SH(w) on a textured dome.
+vec3 control_radiance(GpuLight l, GpuDomeSampling dome, vec3 w) {
     if (l.kind == LIGHT_SUN) return light_radiance(l, vec2(0.0), l.p1.x <= 0.0);
+    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME && dome.width > 0u) return sh9_eval(dome.sh, w);
     return l.texture == NONE ? l.radiance : l.mean;
 }
 
-// E / Lc, the integral of max(0, n.w) over the light as its sampler covers it.
-float control_irradiance(GpuLight l, vec3 p, vec3 n) {
+// E, the integral of Lc max(0, n.w) over the light as its sampler covers it.
+vec3 control_irradiance(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 n) {
+    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME)
+        return dome.width > 0u ? sh9_irradiance(dome.sh, n) : PI * l.radiance;
+    vec3 lc = control_radiance(l, dome, vec3(0.0));
     if (l.kind == LIGHT_SUN && l.p1.x > 0.0) {
         float om = l.p1.x;
-        return irradiance_cap(dot(n, l.p0.xyz), om * (2.0 - om), 1.0 - om);
+        return lc * irradiance_cap(dot(n, l.p0.xyz), om * (2.0 - om), 1.0 - om);
     }
-    return light_irradiance(l, p, n);
+    return lc * light_irradiance(l, p, n);
 }
 
-vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float vis, float tr) {
-    float g = control_irradiance(l, sh.p, sh.n);   // the expectation of sv + so unshadowed
+vec3 control_variate(Shading sh, GpuLight l, GpuDomeSampling dome, float n, vec3 sv, vec3 so, float vis, float tr) {
+    vec3 g = control_irradiance(l, dome, sh.p, sh.n);   // the expectation of sv + so unshadowed
     float a = tr > 0.0 ? vis / tr : 0.0;
-    float k;
+    vec3 k;
     if (frame.control_variates == CONTROL_VARIATES_LOO) {
         // sum_j a_j (G/N - g_j): untraced samples a G/N; visible ones (vis-1)/(tr-1) (G/N - g_j);
         // occluded ones vis/(tr-1) (G/N - g_j).
@@ -373,7 +385,7 @@ vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float 
     } else {
         k = a * (g - sv - so);
     }
-    return sh.albedo * control_radiance(l) * (k * INV_PI);
+    return sh.albedo * k * INV_PI;
 }
 
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
@@ -427,7 +439,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 n_l = float(count);
             }
             bool cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
-            float cv_sv = 0.0, cv_so = 0.0, cv_vis = 0.0, cv_tr = 0.0;
+            vec3 cv_sv = vec3(0.0), cv_so = vec3(0.0);
+            float cv_vis = 0.0, cv_tr = 0.0;
             for (uint j = 0u; j < count; ++j) {
                 LightSample ls = sample_light(l, dome, sh.p, rng_next2(rng));
                 if (!(ls.pdf > 0.0)) continue;
@@ -436,25 +449,26 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 // Divide by the expected count n_l (many lights: the selection probability is in it).
                 vec3 c = f * le / (ls.pdf * n_l);
                 if (cv) {
-                    // g_j / (rho Lc / pi), zero exactly where eval_lobes (and so c) is. V_j is the
+                    // g_j / (rho / pi), zero exactly where eval_lobes (and so c) is. V_j is the
                     // ray's answer, also where c is 0 (a black texel): V_j must not depend on L.
                     float cs = dot(sh.n, ls.wi);
                     float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
                     if (s > 0.0) {
+                        vec3 g = s * control_radiance(l, dome, ls.wi);
                         cv_tr += 1.0;
                         if (shadowed(sh, ls.wi, ls.dist, vec3(1.0)).r > 0.0) {
                             cv_vis += 1.0;
-                            cv_sv += s;
+                            cv_sv += g;
                             result += c;
                         } else {
-                            cv_so += s;
+                            cv_so += g;
                         }
                     }
                 } else {
                     result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
                 }
             }
-            if (cv) result += control_variate(sh, l, float(count), cv_sv, cv_so, cv_vis, cv_tr);
+            if (cv) result += control_variate(sh, l, dome, float(count), cv_sv, cv_so, cv_vis, cv_tr);
             if (!picked) result += shadow_group_end(sh, rng);
         }
         result += shadow_group_end(sh, rng);

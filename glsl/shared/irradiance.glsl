@@ -4,8 +4,8 @@
 // Conventions:
 // * irradiance_*() of an area light returns E / L for a uniform emitter of radiance L, i.e.
 //   pi * form factor (integral over the visible emitter of max(0, n.w) dw). Multiply by the light's
-//   (mean) radiance. The sun returns E / E_perp (GpuLight.radiance holds E_perp). The dome is not
-//   covered here (its control is the SH9 / pre-convolved map of 5.6): light_irradiance() gives 0.
+//   (mean) radiance. The sun returns E / E_perp (GpuLight.radiance holds E_perp). The dome's
+//   control is SH9 (5.6): sh9_irradiance() of its coefficients; light_irradiance() gives 0.
 // * The same one-sidedness as light_sampling.glsl: p behind a one-sided emitter (or inside a
 //   one-sided sphere) gets 0; the receiver hemisphere is clipped at n's horizon (max(0, n.w)),
 //   so the result is the exact integral the samples of light_sampling.glsl estimate with
@@ -209,6 +209,23 @@ float irradiance_disk(vec3 p, vec3 n, vec3 c, vec3 nd, vec3 td, float R, bool tw
     }
     return polygon_close(n, sum, ex, en, cr);
 }
+
+// Real SH9 of order (l, m) = 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22 (src/gpu_scene/dome_sh.rs
+// `basis`): sum_lm k_l c_lm Y_lm(d), band l scaled by k[l].
+vec3 sh9_sum(vec4 c[9], vec3 d, vec3 k) {
+    float x = d.x, y = d.y, z = d.z;
+    vec3 b1 = 0.48860251 * (y * c[1].xyz + z * c[2].xyz + x * c[3].xyz);
+    vec3 b2 = 1.09254843 * (x * y * c[4].xyz + y * z * c[5].xyz + x * z * c[7].xyz)
+        + 0.31539157 * (3.0 * z * z - 1.0) * c[6].xyz + 0.54627422 * (x * x - y * y) * c[8].xyz;
+    return k.x * 0.28209479 * c[0].xyz + k.y * b1 + k.z * b2;
+}
+
+// L_SH(d): the SH9 function of coefficients c in direction d.
+vec3 sh9_eval(vec4 c[9], vec3 d) { return sh9_sum(c, d, vec3(1.0)); }
+
+// Its exact clamped-cosine integral about n (Funk-Hecke, Ramamoorthi & Hanrahan 2001):
+// E(n) = sum A_l c_lm Y_lm(n), A = pi, 2 pi / 3, pi / 4.
+vec3 sh9_irradiance(vec4 c[9], vec3 n) { return sh9_sum(c, n, vec3(PI, 2.0 * PI / 3.0, 0.25 * PI)); }
 
 // The factor by which GpuLight.radiance multiplies: E / L for rect, disk, sphere and triangle
 // lights, E / E_perp for the sun, 0 for the dome (see the header).

@@ -301,8 +301,8 @@ struct GpuLight {
                      // triangle: the GpuInstance index
     uint flags;      // LIGHT_FLAG_*
     float area;      // surface area (rect, disk, sphere, triangle)
-    vec3 mean;       // textured rect, disk, sphere: radiance x the mean of the texture lookup over
-                     // the surface (the control variates' constant radiance), else 0
+    vec3 mean;       // textured rect, disk, sphere, triangle: radiance x the mean of the texture
+                     // lookup over the surface (the control variates' constant radiance), else 0
     uint pad;
 };
 
@@ -318,7 +318,11 @@ struct GpuDomeSampling {
     uint width;
     uint height;
     float integral;        // mean texel weight (sum / (width height)), for diagnostics
-    uint pad;
+    float defensive;       // share of samples drawn uniformly over the sphere (pdf mixed alike);
+                           // 0 in the buffer, set by direct.glsl under control variates
+    vec4 sh[9];            // xyz: the dome's radiance (colour included) projected on real SH9 in world
+                           // directions, order (l, m) = 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22
+                           // (src/gpu_scene/dome_sh.rs): the control variate's L_SH
 };
 
 // A node of the light BVH (src/render/lights.rs): BRDF samples find the finite lights they cross

@@ -49,6 +49,10 @@
 //   the equal-area square. Probabilities are differences of the stored float CDFs, which is
 //   exactly the mass the binary search gives each cell. Without a table (width == 0) the dome is
 //   sampled uniformly (pdf = 1 / (4 pi)). LightSample.uv / LightHit.uv are map coordinates.
+//   Defensive mixture (GpuDomeSampling.defensive = a > 0, under control variates): a share a of
+//   the samples is uniform over the sphere, pdf = a / (4 pi) + (1 - a) p_table, positive in every
+//   direction (the SH9 control is nonzero where the table's pdf is 0); a = 0 is the table alone,
+//   bit for bit.
 #ifndef ILLUM_LIGHT_SAMPLING_GLSL
 #define ILLUM_LIGHT_SAMPLING_GLSL
 
@@ -530,6 +534,28 @@ uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n,
     return lo;
 }
 
+// The table's density at direction w of map coordinates uv (0 where it gives none).
+float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
+    uint W = ds.width, H = ds.height;
+    float cu = uv.x - dome_cell_offset(l, W);
+    if (cu < 0.0) cu += 1.0;
+    uint i = min(uint(max(cu, 0.0) * float(W)), W - 1u);
+    uint j = min(uint(max(uv.y, 0.0) * float(H)), H - 1u);
+    DomeCdfRef marg = DomeCdfRef(ds.marginal);
+    DomeCdfRef cond = DomeCdfRef(ds.conditional);
+    uint base = j * (W + 1u);
+    float pm = marg.v[j + 1u] - marg.v[j];
+    float pc = cond.v[base + i + 1u] - cond.v[base + i];
+    float jacobian = dome_jacobian(l, w);
+    if (!(jacobian > 0.0)) return 0.0;
+    return pm * pc * float(W * H) / jacobian;
+}
+
+// The defensive mixture's density from the table's (see the header).
+float dome_mix_pdf(GpuDomeSampling ds, float table_pdf) {
+    return ds.defensive > 0.0 ? ds.defensive / (4.0 * PI) + (1.0 - ds.defensive) * table_pdf : table_pdf;
+}
+
 LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
     LightSample s = no_light_sample();
     s.dist = INF;
@@ -539,6 +565,16 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
         s.uv = dome_uv(l, s.wi);
         s.pdf = 1.0 / (4.0 * PI);
         return s;
+    }
+    if (ds.defensive > 0.0) {
+        if (u.x < ds.defensive) {
+            s.wi = uniform_sphere(vec2(u.x / ds.defensive, u.y));
+            s.n = -s.wi;
+            s.uv = dome_uv(l, s.wi);
+            s.pdf = dome_mix_pdf(ds, dome_table_pdf(l, ds, s.wi, s.uv));
+            return s;
+        }
+        u.x = (u.x - ds.defensive) / (1.0 - ds.defensive);
     }
     uint W = ds.width, H = ds.height;
     float ux = min(u.x, 0.99999994);
@@ -563,7 +599,7 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
     if (!(jacobian > 0.0)) return s;
     s.n = -s.wi;
     s.uv = uv;
-    s.pdf = pm * pc * float(W * H) / jacobian;
+    s.pdf = dome_mix_pdf(ds, pm * pc * float(W * H) / jacobian);
     return s;
 }
 
@@ -575,19 +611,7 @@ LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 w) {
         h.pdf = 1.0 / (4.0 * PI);
         return h;
     }
-    uint W = ds.width, H = ds.height;
-    float cu = h.uv.x - dome_cell_offset(l, W);
-    if (cu < 0.0) cu += 1.0;
-    uint i = min(uint(max(cu, 0.0) * float(W)), W - 1u);
-    uint j = min(uint(max(h.uv.y, 0.0) * float(H)), H - 1u);
-    DomeCdfRef marg = DomeCdfRef(ds.marginal);
-    DomeCdfRef cond = DomeCdfRef(ds.conditional);
-    uint base = j * (W + 1u);
-    float pm = marg.v[j + 1u] - marg.v[j];
-    float pc = cond.v[base + i + 1u] - cond.v[base + i];
-    float jacobian = dome_jacobian(l, w);
-    if (!(jacobian > 0.0)) return h;
-    h.pdf = pm * pc * float(W * H) / jacobian;
+    h.pdf = dome_mix_pdf(ds, dome_table_pdf(l, ds, w, h.uv));
     return h;
 }
 

@@ -164,10 +164,11 @@ pub struct IntegratorArgs {
     /// luminance / this), unbiased (TECHNIQUES.md 4.3); 0: off.
     #[arg(long, value_name = "T", default_value_t = 0.0)]
     pub shadow_cull: f32,
-    /// Control variates for diffuse light samples of looped rect, disk, sphere, triangle and sun
-    /// lights (textured ones with their mean radiance; not the dome, not lights picked from the
-    /// tree): off, avgvis (the course's average visibility: biased, consistent) or loo (leave one
-    /// out: unbiased).
+    /// Control variates for diffuse light samples of looped rect, disk, sphere, triangle, sun and
+    /// dome lights (textured ones with their mean radiance, a textured dome with its SH9
+    /// projection, its sampler then drawing 10% of its samples uniformly; not lights picked from
+    /// the tree): off, avgvis (the course's average visibility: biased, consistent) or loo (leave
+    /// one out: unbiased).
     #[arg(long, value_name = "MODE", default_value = "off")]
     pub control_variates: crate::render::ControlVariates,
 }

@@ -42,6 +42,9 @@ pub struct DomeTable {
     /// Search guides: `height` buckets of the marginal, then `width` per row of the conditionals,
     /// each the `[lo, hi)` range of intervals a sample in that bucket can fall in.
     pub guides: Vec<[u32; 2]>,
+    /// The dome's radiance on SH9 in world directions (src/gpu_scene/dome_sh.rs), set by the
+    /// caller: the control variates' L_SH.
+    pub sh: [[f32; 4]; 9],
 }
 
 /// Luminance weights of linear RGB (Rec. 709), as `luminance()` in glsl/shared/common.glsl.
@@ -131,6 +134,7 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     }
     DomeTable {
         guides,
+        sh: [[0.0; 4]; 9],
         width: w as u32,
         height: h as u32,
         marginal,
@@ -199,7 +203,8 @@ impl DomeTable {
             width: self.width,
             height: self.height,
             integral: self.integral as f32,
-            pad: 0,
+            defensive: 0.0,
+            sh: self.sh,
         }
     }
 

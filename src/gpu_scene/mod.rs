@@ -4,6 +4,7 @@
 //! conversion to f32: a scene 1e5 units from the origin keeps the precision of one at the origin.
 
 pub mod dome;
+mod dome_sh;
 mod light_mean;
 pub mod light_tree;
 mod lights;
@@ -437,6 +438,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
                     shape: ii as u32,
                     flags: LIGHT_FLAG_GEOMETRY | if m.two_sided { LIGHT_FLAG_TWO_SIDED } else { 0 },
                     area: area as f32,
+                    mean: light_mean::triangle_light_mean(scene, mesh, tri, m),
                     ..Default::default()
                 });
                 features |= FEATURE_TRIANGLE_LIGHTS;
@@ -522,7 +524,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
             .then(|| {
                 let l = &scene.lights[dome_map.0];
                 l.texture
-                    .map(|t| dome::build(&scene.textures[t as usize], l.radiance(), dome_map.1))
+                    .map(|t| dome_sh::table(&scene.textures[t as usize], l, dome_map.1))
             })
             .flatten();
         Ok(Host {

@@ -49,6 +49,7 @@ fn dome_case(
     conv: DomeConvention,
     sub: usize,
     seed: u32,
+    defensive: f32,
 ) {
     let table = dome::build(tex, tint, conv);
     let data = g
@@ -65,11 +66,14 @@ fn dome_case(
         DomeConvention::Mitsuba => LIGHT_FLAG_DOME_MITSUBA,
         DomeConvention::Pbrt => LIGHT_FLAG_DOME_PBRT,
     };
-    let prm = LightParams {
+    let mut prm = LightParams {
         dome: table.gpu(data.address),
         light: l,
         p: [0.0; 4],
     };
+    // The uniform share that control variates mix in (glsl/shared/light_sampling.glsl).
+    prm.dome.defensive = defensive;
+    let a = f64::from(defensive);
     let (w, h) = (tex.width, tex.height);
     let (cw, ch) = dome::cells(conv, w, h);
 
@@ -121,7 +125,8 @@ fn dome_case(
                 (f64::from(j) + 0.5) / f64::from(ch),
             );
             let (dir, jacobian) = dome_map::direction(conv, rot_deg, uv);
-            let pdf = table.texel_probability(i, j) * f64::from(cw * ch) / jacobian;
+            let pdf = a / (4.0 * PI)
+                + (1.0 - a) * table.texel_probability(i, j) * f64::from(cw * ch) / jacobian;
             centres.push((f4(dir, 0.0), pdf));
         }
     }
@@ -170,6 +175,7 @@ fn chi2_dome() {
         DomeConvention::Illum,
         2,
         60,
+        0.0,
     );
     dome_case(
         &g,
@@ -180,6 +186,7 @@ fn chi2_dome() {
         DomeConvention::Mitsuba,
         2,
         63,
+        0.0,
     );
     // A smooth sky: brighter toward the zenith and toward one azimuth, tinted.
     let sky = texture("sky", 64, 32, |i, j| {
@@ -197,6 +204,7 @@ fn chi2_dome() {
         DomeConvention::Illum,
         1,
         61,
+        0.0,
     );
     // pbrt's equal-area square: a hot texel near a crease of the octahedral map, over a gradient.
     let square = texture("square", 16, 16, |i, j| {
@@ -216,6 +224,20 @@ fn chi2_dome() {
         DomeConvention::Pbrt,
         2,
         64,
+        0.0,
+    );
+    // The same with the uniform share of control variates: the equal-area square keeps both
+    // parts' densities constant per bin, so the chi-square quadrature stays exact.
+    dome_case(
+        &g,
+        "pbrt dome, uniform share 0.3",
+        &square,
+        Vec3::ONE,
+        20.0,
+        DomeConvention::Pbrt,
+        2,
+        65,
+        0.3,
     );
     // No table: uniform over the sphere.
     let prm = params(dome_light(0.0), DVec3::ZERO);
