@@ -277,62 +277,69 @@ void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling 
         float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
         if (s > 0.0) {
             cv_tr += 1.0;
-            shadow_push(ls.wi, ls.dist, c, s, false);
+            shadow_ray(ls.wi, ls.dist, c, s, false);
         }
     } else {
         shadow_candidate(ls.wi, ls.dist, c, rng);
     }
 }
 
-// BRDF sample j of lobe k (k == lobes: the diffuse lobe): a candidate for every light the
-// direction crosses (the pruning: a sample that hits none traces nothing).
-void direct_brdf_sample(Shading sh, GpuMaterial m, GpuDomeSampling dome, uint k, bool many, bool tree,
-                        float total_importance, inout Rng rng) {
-    uint technique = frame.technique;
-    uint n_max = frame.light_samples;
-    uint n_b = frame.brdf_samples;
+// A BRDF sample's direction, shared by every light it crosses.
+struct BrdfDir {
     vec3 wi, weight;
     float pdf;
-    bool delta = false;
+    bool delta;
+};
+
+// BRDF sample j of lobe k (k == lobes: the diffuse lobe): its direction and the lights it crosses
+// (ids, their count; 0 when the sample is invalid: the pruning, nothing to trace).
+uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, inout Rng rng, out BrdfDir s,
+                        out uint ids[DIRECT_MAX_CROSSED]) {
+    s.delta = false;
     vec2 u = rng_next2(rng);
     if (k == min(m.lobe_count, 2u)) {
         vec3 c = cosine_hemisphere(u);
-        wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-        pdf = c.z * INV_PI;
-        weight = sh.albedo;
+        s.wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+        s.pdf = c.z * INV_PI;
+        s.weight = sh.albedo;
     } else {
         BrdfSample bs = brdf_sample(m.lobes[k], sh.n, sh.t, sh.b, sh.v, u);
-        if (!bs.valid) return;
-        wi = bs.wi; weight = bs.weight; pdf = bs.pdf; delta = bs.delta;
+        if (!bs.valid) return 0u;
+        s.wi = bs.wi; s.weight = bs.weight; s.pdf = bs.pdf; s.delta = bs.delta;
     }
-    if (!(pdf > 0.0) || dot(wi, sh.ng) <= 0.0) return;
-    uint ids[DIRECT_MAX_CROSSED];
-    uint crossed = lights_along(sh.p, wi, ids);
-    for (uint q = 0u; q < crossed; ++q) {
-        GpuLight l = light_seen_from(sh, ids[q]);
-        if (!light_reaches(l)) continue;
-        LightHit lh = light_hit(l, dome, sh.p, wi);
-        if (!(lh.pdf > 0.0)) continue;
-        float w = 1.0;
-        if (technique == TECHNIQUE_MIS && !delta) {
-            bool infinite = l.kind == LIGHT_DOME || l.kind == LIGHT_SUN;
-            float n_l = !many || (tree && infinite)
-                ? float(light_count_for(l, sh.p, n_max))
-                : tree
-                ? float(n_max) * light_tree_pmf(frame.light_tree, frame.light_trails, sh.p, sh.n, ids[q])
-                : float(n_max) * light_importance(l, sh.p, sh.n) / total_importance;
-            w = mis_power(float(n_b), pdf, n_l, lh.pdf);
-        }
-        vec3 c = weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
-        shadow_candidate(wi, lh.t, c, rng);
+    if (!(s.pdf > 0.0) || dot(s.wi, sh.ng) <= 0.0) return 0u;
+    return lights_along(sh.p, s.wi, ids);
+}
+
+// The candidate of BRDF sample s for light `id` it crosses.
+void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, bool many, bool tree,
+                       float total_importance, inout Rng rng) {
+    uint technique = frame.technique;
+    uint n_max = frame.light_samples;
+    uint n_b = frame.brdf_samples;
+    GpuLight l = light_seen_from(sh, id);
+    if (!light_reaches(l)) return;
+    LightHit lh = light_hit(l, dome, sh.p, s.wi);
+    if (!(lh.pdf > 0.0)) return;
+    float w = 1.0;
+    if (technique == TECHNIQUE_MIS && !s.delta) {
+        bool infinite = l.kind == LIGHT_DOME || l.kind == LIGHT_SUN;
+        float n_l = !many || (tree && infinite)
+            ? float(light_count_for(l, sh.p, n_max))
+            : tree
+            ? float(n_max) * light_tree_pmf(frame.light_tree, frame.light_trails, sh.p, sh.n, id)
+            : float(n_max) * light_importance(l, sh.p, sh.n) / total_importance;
+        w = mis_power(float(n_b), s.pdf, n_l, lh.pdf);
     }
+    vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
+    shadow_candidate(s.wi, lh.t, c, rng);
 }
 
 // Samples come in groups, in this order: the light samples of each round (a looped light, or one
 // pick from the tree or the scan), a closing group (the picks' resampling), then the BRDF samples
 // of each lobe (specular ones, and the diffuse lobe where it is BRDF-sampled). One loop iteration
-// draws one sample and traces its shadow rays (and at a group's end its resampling flush): the
-// only shadow-ray call site (shadow.glsl).
+// makes at most one shadow ray (a light sample; a BRDF sample and the first light it crosses, or
+// the next one; a pick of a resampling flush) and traces it: the only call site (shadow.glsl).
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
@@ -364,6 +371,10 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     float n_l = 0.0;      // its expected samples per shading point
     bool cv = false;      // with a control variate
     float cv_sv = 0.0, cv_so = 0.0, cv_vis = 0.0, cv_tr = 0.0;
+    bool closed = false;  // whether g's closing flush has started
+    BrdfDir bdir;         // a BRDF sample's direction, and the lights it crosses still to do
+    uint ids[DIRECT_MAX_CROSSED];
+    uint crossed = 0u, q = 0u;
     while (g < groups) {
         if (!opened) {
             opened = true;
@@ -372,6 +383,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
             close = false;
             cv = false;
             cv_sv = cv_so = cv_vis = cv_tr = 0.0;
+            closed = false;
+            crossed = q = 0u;
             if (g < rounds) {
                 uint li = g;
                 bool picked = many && g >= looped;
@@ -411,18 +424,46 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 }
             }
         }
-        if (j < count) {
-            if (g < rounds) direct_light_sample(sh, m, l, dome, n_l, cv, cv_tr, rng);
-            else direct_brdf_sample(sh, m, dome, g - rounds - 1u, many, tree, total_importance, rng);
-            j += 1u;
+        g_ray_on = false;
+        if (g_fl_on && !shadow_flush_next()) {
+            result += g_fl_part;
+            shadow_flush_done();
         }
-        bool done = j >= count;
-        if (done && close) shadow_group_end(rng);
-        shadow_trace(sh, result, cv_sv, cv_so, cv_vis);
-        if (done) {
-            if (cv) result += control_variate(sh, l, float(count), cv_sv, cv_so, cv_vis, cv_tr);
-            g += 1u;
-            opened = false;
+        if (!g_fl_on) {
+            // The next light a BRDF sample crosses, else the next sample, else the group's end.
+            bool cross = q < crossed;
+            if (!cross && j < count) {
+                j += 1u;
+                if (g < rounds) {
+                    direct_light_sample(sh, m, l, dome, n_l, cv, cv_tr, rng);
+                } else {
+                    crossed = direct_brdf_sample(sh, m, g - rounds - 1u, rng, bdir, ids);
+                    q = 0u;
+                    cross = crossed > 0u;
+                }
+            } else if (!cross && !closed) {
+                closed = true;
+                if (close) shadow_group_end(rng);
+            } else if (!cross) {
+                if (cv) result += control_variate(sh, l, float(count), cv_sv, cv_so, cv_vis, cv_tr);
+                g += 1u;
+                opened = false;
+            }
+            if (cross) direct_brdf_light(sh, dome, bdir, ids[q++], many, tree, total_importance, rng);
+        }
+        if (g_ray_on) {
+            // The one shadow-ray call site.
+            bool visible = shadow_visible(sh, g_ray_w, g_ray_dist);
+            if (g_ray_cv >= 0.0) {
+                if (visible) {
+                    cv_vis += 1.0;
+                    cv_sv += g_ray_cv;
+                } else {
+                    cv_so += g_ray_cv;
+                }
+            }
+            if (visible && g_ray_flush) g_fl_part += g_ray_c;
+            else if (visible) result += g_ray_c;
         }
     }
     return result;

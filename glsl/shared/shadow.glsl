@@ -1,10 +1,10 @@
 // Shadow rays of direct lighting (direct.glsl): culling and resampling of the candidates
-// (TECHNIQUES.md 4.2, 4.3), and the queue every shadow ray of a shading point is traced from.
+// (TECHNIQUES.md 4.2, 4.3), and the one ray per iteration of direct_lighting()'s loop.
 //
-// Why a queue: the driver inlines every call, so each call site of trace_occluded() is a copy of
-// the traversal for LLVM to compile (about a second of CPU each on a cold cache). The candidates
-// of one sample (light sample, BRDF sample, resampling flush) are pushed here and traced by
-// shadow_trace(), which direct_lighting() calls once: one traversal copy per direct_lighting().
+// Why: the driver inlines every call, so each call site of trace_occluded() is a copy of the
+// traversal for LLVM to compile (about a second of CPU each on a cold cache). direct_lighting()
+// makes at most one ray per iteration of its loop (a light sample, one light a BRDF sample
+// crosses, one pick of a resampling flush) and traces it at one place: one traversal copy.
 // Needs the Shading struct (direct.glsl).
 #ifndef ILLUM_SHADOW_GLSL
 #define ILLUM_SHADOW_GLSL
@@ -38,59 +38,31 @@ bool shadow_visible(Shading sh, vec3 w, float dist) {
     return !trace_occluded(sh.origin, dir, 0.0, tmax, MASK_OCCLUDERS);
 }
 
-// The queue. An entry adds c if its ray is visible; entries pushed with `join` add to the
-// previous entry's sum, which is added to the result as one term (a resampling flush's picks,
-// summed as before the queue, so the arithmetic and hence the image stay the same). A control
-// variate sample (cv_s >= 0) is traced even where c is 0 and reports its answer (shadow_trace).
-// Capacity: one sample pushes at most DIRECT_MAX_CROSSED = 16 candidates or one resampling flush
-// of at most SHADOW_GROUP_MAX = 16 picks, and the group it ends at most one more flush: 32.
-#define SHADOW_QUEUE_MAX 32u
-vec3 g_sq_w[SHADOW_QUEUE_MAX];
-float g_sq_dist[SHADOW_QUEUE_MAX];
-vec3 g_sq_c[SHADOW_QUEUE_MAX];
-float g_sq_cv[SHADOW_QUEUE_MAX];
-bool g_sq_join[SHADOW_QUEUE_MAX];
-uint g_sq_n = 0u;
+// The ray of this iteration of direct_lighting()'s loop (at most one): it adds c if visible, to
+// the result or (g_ray_flush) to the running resampling flush's sum, which is added as one term
+// (as before the loop, so the arithmetic and hence the image stay the same). A control variate
+// sample (cv_s >= 0) is traced even where c is 0 and reports its answer. Scalars, not a queue:
+// a private array costs lavapipe ~17% of a direct render's time in dynamic indexing.
+bool g_ray_on = false;
+vec3 g_ray_w;
+float g_ray_dist;
+vec3 g_ray_c;
+float g_ray_cv;
+bool g_ray_flush;
 
-void shadow_push(vec3 w, float dist, vec3 c, float cv_s, bool join) {
+void shadow_ray(vec3 w, float dist, vec3 c, float cv_s, bool flush) {
     if (cv_s < 0.0 && !(max(c.r, max(c.g, c.b)) > 0.0)) return;   // nothing to add: no ray
-    if (g_sq_n == SHADOW_QUEUE_MAX) return;   // not reached (see the capacity above)
-    g_sq_w[g_sq_n] = w;
-    g_sq_dist[g_sq_n] = dist;
-    g_sq_c[g_sq_n] = c;
-    g_sq_cv[g_sq_n] = cv_s;
-    g_sq_join[g_sq_n] = join;
-    g_sq_n += 1u;
-}
-
-// Traces the queue and empties it: adds the visible entries' c to `result`, and for control
-// variate samples their s to sv (visible) or so (occluded), and 1 to vis where visible.
-void shadow_trace(Shading sh, inout vec3 result, inout float sv, inout float so, inout float vis) {
-    uint n = g_sq_n;
-    g_sq_n = 0u;
-    vec3 part = vec3(0.0);
-    for (uint i = 0u; i < n; ++i) {
-        bool visible = shadow_visible(sh, g_sq_w[i], g_sq_dist[i]);
-        float s = g_sq_cv[i];
-        if (s >= 0.0) {
-            if (visible) {
-                vis += 1.0;
-                sv += s;
-            } else {
-                so += s;
-            }
-        }
-        if (visible) part += g_sq_c[i];
-        if (i + 1u == n || !g_sq_join[i + 1u]) {
-            result += part;
-            part = vec3(0.0);
-        }
-    }
+    g_ray_on = true;
+    g_ray_w = w;
+    g_ray_dist = dist;
+    g_ray_c = c;
+    g_ray_cv = cv_s;
+    g_ray_flush = flush;
 }
 
 // Fewer shadow rays (TECHNIQUES.md 4.2, 4.3). Every candidate (a light or BRDF sample with its
 // unshadowed, MIS-weighted contribution c_i, so that the plain estimate is sum_i V_i c_i) goes
-// through shadow_candidate; with neither feature it is queued at once, as before.
+// through shadow_candidate; with neither feature it is traced at once, as before.
 //
 // Culling (FEATURE_SHADOW_CULL, Russian roulette): with p_i = luminance(c_i) and threshold t, the
 // candidate is kept with probability q_i = min(1, p_i / t) and then counts c_i / q_i:
@@ -114,40 +86,81 @@ float g_cand_dist[SHADOW_GROUP_MAX];
 float g_cand_p[SHADOW_GROUP_MAX];
 uint g_cand_n = 0u;
 
-// Queues shadow rays for the waiting candidates (resampled), as one term of the result.
-void shadow_flush(inout Rng rng) {
+// A flush of the waiting candidates (resampled) runs over several iterations, one ray each:
+// shadow_flush_start() draws its random number, shadow_flush_next() makes the next ray (false
+// when there is none left: the caller then adds g_fl_part and calls shadow_flush_done()).
+bool g_fl_on = false;
+bool g_fl_all;       // K >= M: every candidate as is
+uint g_fl_m, g_fl_k, g_fl_i, g_fl_taken;
+float g_fl_pos, g_fl_cum, g_fl_stride;
+vec3 g_fl_part;
+// A candidate that found the group full: held once the flush is done.
+bool g_hold_on = false;
+vec3 g_hold_w, g_hold_c;
+float g_hold_dist, g_hold_p;
+
+void shadow_flush_start(inout Rng rng) {
     uint m = g_cand_n;
     g_cand_n = 0u;
     if (m == 0u) return;
-    uint k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
-    uint first = g_sq_n;   // the entries from here on are one term
-    if (k >= m) {
-        for (uint i = 0u; i < m; ++i) shadow_push(g_cand_w[i], g_cand_dist[i], g_cand_c[i], -1.0, g_sq_n > first);
-        return;
-    }
+    g_fl_on = true;
+    g_fl_m = m;
+    g_fl_k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
+    g_fl_all = g_fl_k >= m;
+    g_fl_i = 0u;
+    g_fl_taken = 0u;
+    g_fl_part = vec3(0.0);
+    if (g_fl_all) return;
     float wsum = 0.0;
     for (uint i = 0u; i < m; ++i) wsum += g_cand_p[i];
-    float stride = wsum / float(k);
-    float pos = rng_next(rng) * stride;
-    float cum = 0.0;
-    uint taken = 0u;
-    for (uint i = 0u; i < m && taken < k; ++i) {
-        cum += g_cand_p[i];
+    g_fl_stride = wsum / float(g_fl_k);
+    g_fl_pos = rng_next(rng) * g_fl_stride;
+    g_fl_cum = 0.0;
+}
+
+bool shadow_flush_next() {
+    if (g_fl_all) {
+        if (g_fl_i == g_fl_m) return false;
+        uint i = g_fl_i++;
+        shadow_ray(g_cand_w[i], g_cand_dist[i], g_cand_c[i], -1.0, true);
+        return true;
+    }
+    uint m = g_fl_m, k = g_fl_k;
+    while (g_fl_i < m && g_fl_taken < k) {
+        uint i = g_fl_i++;
+        g_fl_cum += g_cand_p[i];
         uint picks = 0u;
-        while (taken + picks < k && pos < cum) {
+        while (g_fl_taken + picks < k && g_fl_pos < g_fl_cum) {
             picks += 1u;
-            pos += stride;
+            g_fl_pos += g_fl_stride;
         }
         // The last candidate takes the picks that rounding of the running sum left over.
-        if (i + 1u == m) picks = k - taken;
-        taken += picks;
-        if (picks > 0u)
-            shadow_push(g_cand_w[i], g_cand_dist[i], g_cand_c[i] * (float(picks) * stride / g_cand_p[i]), -1.0, g_sq_n > first);
+        if (i + 1u == m) picks = k - g_fl_taken;
+        g_fl_taken += picks;
+        if (picks > 0u) {
+            shadow_ray(g_cand_w[i], g_cand_dist[i], g_cand_c[i] * (float(picks) * g_fl_stride / g_cand_p[i]), -1.0, true);
+            return true;
+        }
     }
+    return false;
+}
+
+void shadow_hold(vec3 w, float dist, vec3 c, float p) {
+    g_cand_w[g_cand_n] = w;
+    g_cand_c[g_cand_n] = c;
+    g_cand_dist[g_cand_n] = dist;
+    g_cand_p[g_cand_n] = p;
+    g_cand_n += 1u;
+}
+
+void shadow_flush_done() {
+    g_fl_on = false;
+    if (g_hold_on) shadow_hold(g_hold_w, g_hold_dist, g_hold_c, g_hold_p);
+    g_hold_on = false;
 }
 
 // One candidate of contribution c along w (light point at dist): culled, held back for
-// resampling, or queued now.
+// resampling (a full group starts a flush first), or this iteration's ray.
 void shadow_candidate(vec3 w, float dist, vec3 c, inout Rng rng) {
     if (!(max(c.r, max(c.g, c.b)) > 0.0)) return;
     float p = luminance(c);
@@ -158,20 +171,24 @@ void shadow_candidate(vec3 w, float dist, vec3 c, inout Rng rng) {
         p /= q;
     }
     if (has_feature(FEATURE_SHADOW_RESAMPLE) && p > 0.0) {
-        if (g_cand_n == SHADOW_GROUP_MAX) shadow_flush(rng);
-        g_cand_w[g_cand_n] = w;
-        g_cand_c[g_cand_n] = c;
-        g_cand_dist[g_cand_n] = dist;
-        g_cand_p[g_cand_n] = p;
-        g_cand_n += 1u;
+        if (g_cand_n == SHADOW_GROUP_MAX) {
+            shadow_flush_start(rng);
+            g_hold_on = true;
+            g_hold_w = w;
+            g_hold_c = c;
+            g_hold_dist = dist;
+            g_hold_p = p;
+        } else {
+            shadow_hold(w, dist, c, p);
+        }
         return;
     }
-    shadow_push(w, dist, c, -1.0, false);
+    shadow_ray(w, dist, c, -1.0, false);
 }
 
 // Closes a resampling group (nothing without FEATURE_SHADOW_RESAMPLE).
 void shadow_group_end(inout Rng rng) {
-    if (has_feature(FEATURE_SHADOW_RESAMPLE)) shadow_flush(rng);
+    if (has_feature(FEATURE_SHADOW_RESAMPLE)) shadow_flush_start(rng);
 }
 
 #endif
