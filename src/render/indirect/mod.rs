@@ -95,91 +95,24 @@ impl Integrator for Full {
     }
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
-        // The cache's update kernel, where a render will want it, is created on another thread
-        // while this one creates the film kernel (the driver's work on one pipeline is
-        // single-threaded: on two cores this hides the shorter one).
-        let wants_cache = self.0.radiosity_cache && cache_reason(scene).is_empty();
-        let kernel = wants_cache.then(|| UpdateKernel::of(scene));
-        let (film, update) = std::thread::scope(|s| {
-            let update = kernel.as_ref().map(|k| s.spawn(|| k.create(ctx)));
-            let film = film_pipeline(
-                ctx,
-                scene,
-                self.0.kernel_features(),
-                "full",
-                (shaders::FULL_RQ, shaders::FULL_BVH),
-                true,
-            );
-            let update = update.map(|h| h.join().expect("the update kernel's thread panicked"));
-            (film, update)
-        });
-        let film = film?;
-        let spare = update.transpose()?;
-        if let Some(u) = &spare {
-            scene.trace.bind(u);
-        }
+        let film = film_pipeline(
+            ctx,
+            scene,
+            self.0.kernel_features(),
+            "full",
+            (shaders::FULL_RQ, shaders::FULL_BVH),
+            true,
+        )?;
         Ok(Box::new(FullKernels {
             film,
-            spare: RefCell::new(spare),
             cache: RefCell::new(None),
             off_reason: RefCell::new(String::new()),
         }))
     }
 }
 
-/// Why a scene needs no radiosity cache ("" when it may): nothing could read it.
-fn cache_reason(scene: &PreparedScene) -> &'static str {
-    if !(scene.max_albedo > 0.0 && scene.gpu.emitters > 0) {
-        "off (no diffuse material or no light: nothing to cache)"
-    } else {
-        ""
-    }
-}
-
-/// What creating the cache's update kernel for a scene takes (plain data, for another thread).
-struct UpdateKernel {
-    bindings: Vec<(u32, vk::DescriptorType)>,
-    spirv: &'static [u8],
-    features: u32,
-}
-
-impl UpdateKernel {
-    fn of(scene: &PreparedScene) -> UpdateKernel {
-        let mut bindings = vec![(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER)];
-        bindings.extend(scene.trace.bindings());
-        UpdateKernel {
-            bindings,
-            spirv: scene
-                .trace
-                .select(shaders::RADIOSITY_UPDATE_RQ, shaders::RADIOSITY_UPDATE_BVH),
-            features: scene.gpu.features,
-        }
-    }
-
-    /// The pipeline, not yet bound to the scene's trace structures.
-    fn create(&self, ctx: &Context) -> Result<ComputePipeline> {
-        ComputePipeline::new(
-            ctx,
-            "radiosity_update",
-            self.spirv,
-            &self.bindings,
-            std::mem::size_of::<RadiosityPass>() as u32,
-            &[self.features],
-        )
-    }
-}
-
-/// The radiosity cache's update kernel for a scene, bound to its trace structures.
-fn update_pipeline(ctx: &Context, scene: &PreparedScene) -> Result<ComputePipeline> {
-    let update = UpdateKernel::of(scene).create(ctx)?;
-    scene.trace.bind(&update);
-    Ok(update)
-}
-
 struct FullKernels {
     film: ComputePipeline,
-    /// The update kernel created with the film kernel, until the first cache takes it.
-    spare: RefCell<Option<ComputePipeline>>,
     /// Created by the first render that uses a cache (its update kernel is compiled then).
     cache: RefCell<Option<RadiosityCache>>,
     /// Why the last render had no cache ("" when it had one).
@@ -197,8 +130,10 @@ impl IntegratorPasses for FullKernels {
         // Leave the cache out where nothing could read it: no diffuse material or no light.
         let reason = if !settings.integrator.radiosity_cache {
             "off (--radiosity-cache off: brute force)"
+        } else if !(scene.max_albedo > 0.0 && scene.gpu.emitters > 0) {
+            "off (no diffuse material or no light: nothing to cache)"
         } else {
-            cache_reason(scene)
+            ""
         };
         *self.off_reason.borrow_mut() = reason.to_string();
         frame.radiosity_table = 0;
@@ -213,10 +148,22 @@ impl IntegratorPasses for FullKernels {
         if cache.as_ref().is_none_or(|c| c.shape != shape) {
             let update = match cache.take() {
                 Some(old) => old.into_pipeline(),
-                None => match self.spare.borrow_mut().take() {
-                    Some(update) => update,
-                    None => update_pipeline(ctx, scene)?,
-                },
+                None => {
+                    let mut bindings = vec![(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER)];
+                    bindings.extend(scene.trace.bindings());
+                    let update = ComputePipeline::new(
+                        ctx,
+                        "radiosity_update",
+                        scene
+                            .trace
+                            .select(shaders::RADIOSITY_UPDATE_RQ, shaders::RADIOSITY_UPDATE_BVH),
+                        &bindings,
+                        std::mem::size_of::<RadiosityPass>() as u32,
+                        &[scene.gpu.features],
+                    )?;
+                    scene.trace.bind(&update);
+                    update
+                }
             };
             *cache = Some(RadiosityCache::new(ctx, update, shape)?);
         }
