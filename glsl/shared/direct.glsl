@@ -259,7 +259,7 @@ vec3 control_variate(Shading sh, GpuLight l, float n, float sv, float so, float 
 }
 
 // Light sample j of light l (looped or picked, n_l its expected count): its candidate, or with a
-// control variate (cv) its ray and g_j (in cv_tr and the queue's s).
+// control variate (cv) its ray and g_j (in cv_tr and the ray's s).
 void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling dome, float n_l, bool cv,
                          inout float cv_tr, inout Rng rng) {
     uint technique = frame.technique;
