@@ -154,61 +154,13 @@ bool radiosity_lookup(Shading sh, float width, inout Rng rng, out vec3 value) {
     return false;
 }
 
-// Outgoing diffuse radiance B = rho/pi E (emission excluded) at the surface that ray (o, d) hit
-// (h), for a cone of `width` there and spread `angle`. With the cache: the cached value where the
-// segment is longer than the cell (SHaRC's rule) and the cell has one; otherwise one more diffuse
-// bounce in place. Without the cache: brute force, a diffuse-only path with next-event estimation
-// at every vertex. Either way Russian roulette ends paths after three bounces in place, so a miss
-// costs time, never bias.
-vec3 radiosity_along(Hit h, vec3 o, vec3 d, float width, float angle, inout Rng rng) {
-    bool cache = radiosity_cache_on();
-    vec3 sum = vec3(0.0), thr = vec3(1.0);
-    for (uint k = 0u; k < RADIOSITY_BRUTE_MAX; ++k) {
-        if (h.kind == HIT_NONE) break;
-        Surface s = surface_at(h, o, d);
-        if (s.material == NONE) break;   // a light's surface: direct lighting's
-        GpuMaterial m = get_material(s.material);
-        Shading sh = shading_at(s, m, d);
-        if (!(max3(sh.albedo) > 0.0)) break;
-        if (cache && h.t > radiosity_cell_size(radiosity_level(width))) {
-            vec3 b;
-            if (radiosity_lookup(sh, width, rng, b)) {
-                sum += thr * b;
-                break;
-            }
-        }
-        m.lobe_count = 0u;   // the diffuse lobe only
-        sum += thr * direct_lighting(sh, m, rng);
-        vec3 c = cosine_hemisphere(rng_next2(rng));
-        vec3 wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-        if (!(c.z > 0.0) || dot(wi, sh.ng) <= 0.0) break;
-        thr *= sh.albedo;
-        if (k >= 2u) {
-            float q = min(max3(thr), 0.95);
-            if (rng_next(rng) >= q) break;
-            thr /= q;
-        }
-        o = sh.origin;
-        d = wi;
-        h = trace_closest(o, d, 0.0, INF, MASK_OCCLUDERS);
-        g_rays += 1u;
-        angle = frame.diffuse_spread;
-        width = h.t * angle;
-    }
-    return sum;
-}
-
-// Indirect diffuse at sh: one cosine-sampled ray whose hit returns its outgoing diffuse radiance.
-vec3 indirect_diffuse(Shading sh, inout Rng rng) {
-    if (!(max3(sh.albedo) > 0.0)) return vec3(0.0);
-    vec3 c = cosine_hemisphere(rng_next2(rng));
-    vec3 wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-    if (!(c.z > 0.0) || dot(wi, sh.ng) <= 0.0) return vec3(0.0);
-    Hit h = trace_closest(sh.origin, wi, 0.0, INF, MASK_OCCLUDERS);
-    g_rays += 1u;
-    if (h.kind == HIT_NONE) return vec3(0.0);
-    float spread = frame.diffuse_spread;
-    return sh.albedo * radiosity_along(h, sh.origin, wi, h.t * spread, spread, rng);
-}
+// The diffuse chain: outgoing diffuse radiance B = rho/pi E (emission excluded) at the surface a
+// ray hit, for a cone of width h.t * frame.diffuse_spread there. With the cache: the cached value
+// where the segment is longer than the cell (SHaRC's rule) and the cell has one; otherwise direct
+// lighting of the diffuse lobe plus one more cosine-sampled bounce in place. Without the cache:
+// brute force, a diffuse-only path with next-event estimation at every vertex. Either way Russian
+// roulette ends paths after three bounces in place (at most RADIOSITY_BRUTE_MAX), so a miss costs
+// time, never bias. Indirect diffuse at a vertex: albedo times B along one cosine-sampled ray.
+// The kernels walk it inside their one loop of rays (full.comp, radiosity_update.comp).
 
 #endif

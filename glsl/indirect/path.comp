@@ -36,37 +36,44 @@ void main() {
         Rng rng;
         vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);
         vec3 o = frame.cam_origin.xyz;
-        Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
-        g_rays += 1u;
-        vec3 le, direct = vec3(0.0), rest = vec3(0.0);
+        vec3 le = vec3(0.0), direct = vec3(0.0), rest = vec3(0.0), thr = vec3(1.0);
         bool first_diffuse = false;
         GpuMaterial m;
         Shading sh;
-        if (film_camera_hit(h, o, d, acc, le, m, sh)) {
-            if (max_depth >= 2u) direct = direct_lighting(sh, m, rng);
-            direct = film_clamp(direct, acc);
-            vec3 thr = vec3(1.0);
-            // sh is vertex `depth` (the camera hit is 1); direct lighting at the next vertex
-            // takes depth + 2 segments.
-            for (uint depth = 1u; depth < PATH_MAX_VERTICES && depth + 2u <= max_depth; ++depth) {
-                Bounce b = sample_bounce(sh, m, true, true, rng);
-                if (!b.valid) break;
-                if (depth == 1u) first_diffuse = b.diffuse;
-                thr *= b.weight;
-                if (depth >= 3u) {
-                    float q = min(max3(thr), 0.95);
-                    if (rng_next(rng) >= q) break;
-                    thr /= q;
-                }
-                Hit hn = trace_closest(sh.origin, b.wi, 0.0, INF, MASK_OCCLUDERS);
-                g_rays += 1u;
-                if (hn.kind == HIT_NONE) break;
-                Surface sn = surface_at(hn, sh.origin, b.wi);
-                if (sn.material == NONE) break;
-                m = get_material(sn.material);
-                sh = shading_at(sn, m, b.wi);
-                rest += thr * direct_lighting(sh, m, rng);
+        uint mask = MASK_GEOMETRY | MASK_LIGHTS;
+        // One ray and one vertex per iteration (the camera hit is vertex 1): the kernel holds one
+        // closest-hit traversal and one direct_lighting() (full.comp says why). Direct lighting
+        // at vertex `depth` takes depth + 1 segments.
+        for (uint depth = 1u;; ++depth) {
+            Hit h = trace_closest(o, d, 0.0, INF, mask);
+            g_rays += 1u;
+            bool shade = true;
+            if (depth == 1u) {
+                if (!film_camera_hit(h, o, d, acc, le, m, sh)) break;
+                shade = max_depth >= 2u;
+            } else {
+                if (h.kind == HIT_NONE) break;
+                Surface s = surface_at(h, o, d);
+                if (s.material == NONE) break;
+                m = get_material(s.material);
+                sh = shading_at(s, m, d);
             }
+            vec3 dl = shade ? direct_lighting(sh, m, rng) : vec3(0.0);
+            if (depth == 1u) direct = film_clamp(dl, acc);
+            else rest += thr * dl;
+            if (!(depth < PATH_MAX_VERTICES && depth + 2u <= max_depth)) break;
+            Bounce b = sample_bounce(sh, m, true, true, rng);
+            if (!b.valid) break;
+            if (depth == 1u) first_diffuse = b.diffuse;
+            thr *= b.weight;
+            if (depth >= 3u) {
+                float q = min(max3(thr), 0.95);
+                if (rng_next(rng) >= q) break;
+                thr /= q;
+            }
+            o = sh.origin;
+            d = b.wi;
+            mask = MASK_OCCLUDERS;
         }
         vec3 beauty = le + direct + rest;
         if (!film_add(acc, sample_index, beauty, le)) le = direct = rest = vec3(0.0);

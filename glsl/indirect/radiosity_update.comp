@@ -15,6 +15,11 @@ layout(local_size_x = 64) in;
 layout(push_constant, scalar) uniform PassBlock { RadiosityPass pc; };
 layout(buffer_reference, scalar, buffer_reference_align = 8) writeonly buffer RecordRef { RadiosityRecord v[]; };
 
+#define RAY_CAMERA 0u
+#define RAY_VERTEX 1u   // its hit is the path's vertex v
+#define RAY_NEXT 2u     // from vertex v: its hit is vertex v + 1 and the diffuse chain's first
+#define RAY_CHAIN 3u    // the diffuse chain's next bounce (indirect.glsl)
+
 void main() {
     uint path = gl_GlobalInvocationID.x;
     if (path >= pc.paths) return;
@@ -35,60 +40,147 @@ void main() {
     vec2 film_uv = min(corner + rng_next2(rng) * float(pc.block), size * (1.0 - 1e-6)) / size;
     vec3 d = camera_direction(film_uv);
     vec3 o = frame.cam_origin.xyz;
-    Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
-    g_rays += 1u;
-    if (h.kind == HIT_NONE) return;
-    Surface s = surface_at(h, o, d);
-    if (s.material == NONE) return;
-    GpuMaterial m = get_material(s.material);
-    Shading sh = shading_at(s, m, d);
+    uint mask = MASK_GEOMETRY | MASK_LIGHTS;
+    // One loop, one ray and one vertex per iteration, in the order (and with the random numbers)
+    // of "camera hit, first bounce; at each path vertex direct lighting, then the diffuse chain
+    // (indirect.glsl) from the next vertex, which the path then visits itself": the kernel holds one closest-hit
+    // traversal and one direct_lighting() (full.comp says why).
+    uint ray = RAY_CAMERA;
+    bool trace = true;
+    Hit h;
     float angle = pixel_spread();
-    float width = h.t * angle;
-    Bounce b = sample_bounce(sh, m, true, true, rng);
-    if (!b.valid) return;
-    // Cones as the full integrator's (indirect.glsl): a diffuse bounce starts a new one.
-    if (b.diffuse) {
-        angle = b.spread;
-        width = 0.0;
-    } else {
-        angle += b.spread;
-    }
-    o = sh.origin;
-    d = b.wi;
-    h = trace_closest(o, d, 0.0, INF, MASK_OCCLUDERS);
-    g_rays += 1u;
-    for (uint v = 0u; v < pc.vertices; ++v) {
-        if (h.kind == HIT_NONE) break;
-        width += h.t * angle;
-        s = surface_at(h, o, d);
-        if (s.material == NONE) break;
-        m = get_material(s.material);
-        sh = shading_at(s, m, d);
-        if (!(max3(sh.albedo) > 0.0)) break;
-        m.lobe_count = 0u;
-        vec3 value = direct_lighting(sh, m, rng);
-        vec3 c = cosine_hemisphere(rng_next2(rng));
-        vec3 wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-        Hit next;
-        next.kind = HIT_NONE;
-        float next_angle = frame.diffuse_spread;
-        if (c.z > 0.0 && dot(wi, sh.ng) > 0.0) {
-            next = trace_closest(sh.origin, wi, 0.0, INF, MASK_OCCLUDERS);
+    float width = 0.0;
+    uint v = 0u;
+    GpuMaterial m;
+    Shading sh;
+    // The path's vertex v: its shading, record value and cone width; the next vertex's ray and hit.
+    Shading sh_v;
+    vec3 value = vec3(0.0);
+    float width_v = 0.0;
+    Hit next;
+    vec3 o_next = o, d_next = d;
+    // The diffuse chain from the next vertex.
+    vec3 sum_d = vec3(0.0), thr_d = vec3(1.0);
+    uint vertex_d = 0u;
+    for (;;) {
+        if (trace) {
+            h = trace_closest(o, d, 0.0, INF, mask);
             g_rays += 1u;
-            if (next.kind != HIT_NONE)
-                value += sh.albedo * radiosity_along(next, sh.origin, wi, next.t * next_angle, next_angle, rng);
         }
+        trace = true;
+        mask = MASK_OCCLUDERS;
+        if (ray == RAY_CAMERA) {
+            if (h.kind == HIT_NONE) return;
+            Surface s = surface_at(h, o, d);
+            if (s.material == NONE) return;
+            m = get_material(s.material);
+            sh = shading_at(s, m, d);
+            width = h.t * angle;
+            Bounce b = sample_bounce(sh, m, true, true, rng);
+            if (!b.valid) return;
+            // Cones as the full integrator's (indirect.glsl): a diffuse bounce starts a new one.
+            if (b.diffuse) {
+                angle = b.spread;
+                width = 0.0;
+            } else {
+                angle += b.spread;
+            }
+            o = sh.origin;
+            d = b.wi;
+            ray = RAY_VERTEX;
+            continue;
+        }
+        bool shade = false;
+        bool diffuse_over = true;   // the diffuse chain is done
+        if (ray == RAY_VERTEX) {
+            if (v >= pc.vertices || h.kind == HIT_NONE) break;
+            width += h.t * angle;
+            Surface s = surface_at(h, o, d);
+            if (s.material == NONE) break;
+            m = get_material(s.material);
+            sh = shading_at(s, m, d);
+            if (!(max3(sh.albedo) > 0.0)) break;
+            m.lobe_count = 0u;
+            shade = true;
+        } else {
+            if (ray == RAY_NEXT) {
+                next = h;
+                o_next = o;
+                d_next = d;
+                sum_d = vec3(0.0);
+                thr_d = vec3(1.0);
+                vertex_d = 0u;
+            }
+            if (h.kind != HIT_NONE && vertex_d < RADIOSITY_BRUTE_MAX) {
+                Surface s = surface_at(h, o, d);
+                if (s.material != NONE) {
+                    m = get_material(s.material);
+                    sh = shading_at(s, m, d);
+                    if (max3(sh.albedo) > 0.0) {
+                        float w = h.t * frame.diffuse_spread;
+                        vec3 b;
+                        if (radiosity_cache_on() && h.t > radiosity_cell_size(radiosity_level(w)) && radiosity_lookup(sh, w, rng, b)) {
+                            sum_d += thr_d * b;
+                        } else {
+                            m.lobe_count = 0u;
+                            shade = true;
+                            diffuse_over = false;
+                        }
+                    }
+                }
+            }
+        }
+        vec3 dl = shade ? direct_lighting(sh, m, rng) : vec3(0.0);
+        if (ray == RAY_VERTEX) {
+            // Vertex v: direct lighting, then one cosine-sampled bounce whose hit returns B.
+            value = dl;
+            sh_v = sh;
+            width_v = width;
+            next.kind = HIT_NONE;
+            vec3 c = cosine_hemisphere(rng_next2(rng));
+            d = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+            o = sh.origin;
+            if (c.z > 0.0 && dot(d, sh.ng) > 0.0) {
+                ray = RAY_NEXT;
+                continue;
+            }
+        } else if (shade) {
+            sum_d += thr_d * dl;
+            vec3 c = cosine_hemisphere(rng_next2(rng));
+            vec3 wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+            diffuse_over = !(c.z > 0.0) || dot(wi, sh.ng) <= 0.0;
+            if (!diffuse_over) {
+                thr_d *= sh.albedo;
+                if (vertex_d >= 2u) {
+                    float q = min(max3(thr_d), 0.95);
+                    diffuse_over = rng_next(rng) >= q;
+                    thr_d /= q;
+                }
+            }
+            vertex_d += 1u;
+            if (!diffuse_over) {
+                o = sh.origin;
+                d = wi;
+                ray = RAY_CHAIN;
+                continue;
+            }
+        }
+        // Vertex v is complete: its record; then the path goes on to the next vertex (hit already).
+        if (next.kind != HIT_NONE) value += sh_v.albedo * sum_d;
         RadiosityRecord r;
         r.value = value;
         r.valid = non_finite(value) ? 0u : 1u;
-        uint level = radiosity_level(width);
+        uint level = radiosity_level(width_v);
         for (uint k = 0u; k < RADIOSITY_RECORD_KEYS; ++k)
-            r.keys[k] = radiosity_key(sh.p, sh.ng, radiosity_record_level(level, k));
+            r.keys[k] = radiosity_key(sh_v.p, sh_v.ng, radiosity_record_level(level, k));
         records.v[base + v] = r;
-        o = sh.origin;
-        d = wi;
+        v += 1u;
+        o = o_next;
+        d = d_next;
         h = next;
-        angle = next_angle;
+        trace = false;
+        ray = RAY_VERTEX;
+        angle = frame.diffuse_spread;
         width = 0.0;
     }
 }

@@ -201,125 +201,7 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
     return sum;
 }
 
-// Rays traced by this invocation (for the rays-per-second figures).
-uint g_rays = 0u;
-
-float max_abs(vec3 v) { return max(abs(v.x), max(abs(v.y), abs(v.z))); }
-
-// Relative float32 error allowed at the end of a shadow segment: ~64 ulp of the larger end's
-// coordinates, a quarter of offset_ray_origin's 256-ulp offset, so rounding of the light point
-// (and of the tracer's hit on it) cannot put the emitter's surface inside the segment.
-const float SHADOW_END_ULPS = 64.0 / 8388608.0;
-
-// Returns c if the light point p + dist w (dist = INF: the direction w) is visible from the
-// shading point. The segment runs from the offset origin to that point and stops short of it by
-// 1e-4 of its length plus the end's rounding (pbrt-v4's ShadowEpsilon, with an absolute term for
-// scenes far from the camera).
-vec3 shadowed(Shading sh, vec3 w, float dist, vec3 c) {
-    if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
-    g_rays += 1u;
-    // One trace_occluded call: every call site is a copy of the traversal in the compiled kernel.
-    vec3 dir = w;
-    float tmax = INF;
-    if (dist != INF) {
-        vec3 x = sh.p + dist * w;
-        vec3 seg = x - sh.origin;
-        float len = length(seg);
-        tmax = len * (1.0 - 1e-4) - SHADOW_END_ULPS * max(max_abs(x), max_abs(sh.origin));
-        if (!(tmax > 0.0)) return c;   // nothing fits between them
-        dir = seg / len;
-    }
-    return trace_occluded(sh.origin, dir, 0.0, tmax, MASK_OCCLUDERS) ? vec3(0.0) : c;
-}
-
-// Fewer shadow rays (TECHNIQUES.md 4.2, 4.3). Every candidate (a light or BRDF sample with its
-// unshadowed, MIS-weighted contribution c_i, so that the plain estimate is sum_i V_i c_i) goes
-// through shadow_candidate; with neither feature it is traced at once, as before.
-//
-// Culling (FEATURE_SHADOW_CULL, Russian roulette): with p_i = luminance(c_i) and threshold t, the
-// candidate is kept with probability q_i = min(1, p_i / t) and then counts c_i / q_i:
-// E[kept c_i V_i / q_i] = c_i V_i, so the estimate stays unbiased (a hard cutoff would not be).
-//
-// Resampling (FEATURE_SHADOW_RESAMPLE): the candidates of a group (below) are held back; of its M
-// non-zero ones, K = ceil(pct M) picks are made by systematic resampling on p_i: with
-// W = sum_i p_i, one u in [0, 1) and positions (k + u) W / K, k < K, along the running sum of the
-// p_i, candidate i gets n_i picks, E[n_i] = K p_i / W exactly. It is traced once and counts
-//     n_i (W / K) V_i c_i / p_i,
-// so E[. | candidates] = sum_i (K p_i / W)(W / K) V_i c_i / p_i = sum_i V_i c_i: unbiased. At most
-// K rays (fewer when a candidate is picked more than once); K >= M traces every candidate as is.
-// Groups: the light samples of one looped light; all light samples that pick a light (tree, scan);
-// the BRDF samples of one lobe (over every light they hit); and a group closes early when
-// SHADOW_GROUP_MAX candidates wait. Any grouping fixed by the candidates keeps the estimate
-// unbiased; groups only change its variance.
-#define SHADOW_GROUP_MAX 16u
-vec3 g_cand_w[SHADOW_GROUP_MAX];
-vec3 g_cand_c[SHADOW_GROUP_MAX];
-float g_cand_dist[SHADOW_GROUP_MAX];
-float g_cand_p[SHADOW_GROUP_MAX];
-uint g_cand_n = 0u;
-
-// Traces shadow rays for the waiting candidates (resampled) and returns their contribution.
-vec3 shadow_flush(Shading sh, inout Rng rng) {
-    uint m = g_cand_n;
-    g_cand_n = 0u;
-    vec3 sum = vec3(0.0);
-    if (m == 0u) return sum;
-    uint k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
-    if (k >= m) {
-        for (uint i = 0u; i < m; ++i) sum += shadowed(sh, g_cand_w[i], g_cand_dist[i], g_cand_c[i]);
-        return sum;
-    }
-    float wsum = 0.0;
-    for (uint i = 0u; i < m; ++i) wsum += g_cand_p[i];
-    float stride = wsum / float(k);
-    float pos = rng_next(rng) * stride;
-    float cum = 0.0;
-    uint taken = 0u;
-    for (uint i = 0u; i < m && taken < k; ++i) {
-        cum += g_cand_p[i];
-        uint picks = 0u;
-        while (taken + picks < k && pos < cum) {
-            picks += 1u;
-            pos += stride;
-        }
-        // The last candidate takes the picks that rounding of the running sum left over.
-        if (i + 1u == m) picks = k - taken;
-        taken += picks;
-        if (picks > 0u)
-            sum += shadowed(sh, g_cand_w[i], g_cand_dist[i], g_cand_c[i] * (float(picks) * stride / g_cand_p[i]));
-    }
-    return sum;
-}
-
-// One candidate of contribution c along w (light point at dist): culled, held back for
-// resampling, or traced now. Returns what it adds now (held-back ones add at the next flush).
-vec3 shadow_candidate(Shading sh, vec3 w, float dist, vec3 c, inout Rng rng) {
-    if (!(max(c.r, max(c.g, c.b)) > 0.0)) return vec3(0.0);
-    float p = luminance(c);
-    if (has_feature(FEATURE_SHADOW_CULL) && p > 0.0 && p < frame.shadow_cull) {
-        float q = p / frame.shadow_cull;
-        if (rng_next(rng) >= q) return vec3(0.0);
-        c /= q;
-        p /= q;
-    }
-    if (has_feature(FEATURE_SHADOW_RESAMPLE) && p > 0.0) {
-        vec3 flushed = vec3(0.0);
-        if (g_cand_n == SHADOW_GROUP_MAX) flushed = shadow_flush(sh, rng);
-        g_cand_w[g_cand_n] = w;
-        g_cand_c[g_cand_n] = c;
-        g_cand_dist[g_cand_n] = dist;
-        g_cand_p[g_cand_n] = p;
-        g_cand_n += 1u;
-        return flushed;
-    }
-    return shadowed(sh, w, dist, c);
-}
-
-// Closes a resampling group (nothing without FEATURE_SHADOW_RESAMPLE).
-vec3 shadow_group_end(Shading sh, inout Rng rng) {
-    if (!has_feature(FEATURE_SHADOW_RESAMPLE)) return vec3(0.0);
-    return shadow_flush(sh, rng);
-}
+#include "shadow.glsl"
 
 // Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped light, the N light
 // samples' diffuse terms g_j = (rho/pi) Lc(w_j) max(0, n.w_j) / (pdf_j N), with Lc a control
@@ -388,6 +270,88 @@ vec3 control_variate(Shading sh, GpuLight l, GpuDomeSampling dome, float n, vec3
     return sh.albedo * k * INV_PI;
 }
 
+// Light sample j of light l (looped or picked, n_l its expected count): its candidate, or with a
+// control variate (cv) its ray and g_j (in cv_tr and the ray's s).
+void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling dome, float n_l, bool cv,
+                         inout float cv_tr, inout Rng rng) {
+    uint technique = frame.technique;
+    bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
+    LightSample ls = sample_light(l, dome, sh.p, rng_next2(rng));
+    if (!(ls.pdf > 0.0)) return;
+    vec3 le = light_radiance(l, ls.uv, ls.delta);
+    vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, frame.brdf_samples);
+    // Divide by the expected count n_l (many lights: the selection probability is in it).
+    vec3 c = f * le / (ls.pdf * n_l);
+    if (cv) {
+        // g_j / (rho Lc(w_j) / pi), zero exactly where eval_lobes (and so c) is. V_j is the
+        // ray's answer, also where c is 0 (a black texel): V_j must not depend on L.
+        float cs = dot(sh.n, ls.wi);
+        float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
+        if (s > 0.0) {
+            cv_tr += 1.0;
+            shadow_ray(ls.wi, ls.dist, c, s, false);
+        }
+    } else {
+        shadow_candidate(ls.wi, ls.dist, c, rng);
+    }
+}
+
+// A BRDF sample's direction, shared by every light it crosses.
+struct BrdfDir {
+    vec3 wi, weight;
+    float pdf;
+    bool delta;
+};
+
+// BRDF sample j of lobe k (k == lobes: the diffuse lobe): its direction and the lights it crosses
+// (ids, their count; 0 when the sample is invalid: the pruning, nothing to trace).
+uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, inout Rng rng, out BrdfDir s,
+                        out uint ids[DIRECT_MAX_CROSSED]) {
+    s.delta = false;
+    vec2 u = rng_next2(rng);
+    if (k == min(m.lobe_count, 2u)) {
+        vec3 c = cosine_hemisphere(u);
+        s.wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+        s.pdf = c.z * INV_PI;
+        s.weight = sh.albedo;
+    } else {
+        BrdfSample bs = brdf_sample(m.lobes[k], sh.n, sh.t, sh.b, sh.v, u);
+        if (!bs.valid) return 0u;
+        s.wi = bs.wi; s.weight = bs.weight; s.pdf = bs.pdf; s.delta = bs.delta;
+    }
+    if (!(s.pdf > 0.0) || dot(s.wi, sh.ng) <= 0.0) return 0u;
+    return lights_along(sh.p, s.wi, ids);
+}
+
+// The candidate of BRDF sample s for light `id` it crosses.
+void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, bool many, bool tree,
+                       float total_importance, inout Rng rng) {
+    uint technique = frame.technique;
+    uint n_max = frame.light_samples;
+    uint n_b = frame.brdf_samples;
+    GpuLight l = light_seen_from(sh, id);
+    if (!light_reaches(l)) return;
+    LightHit lh = light_hit(l, dome, sh.p, s.wi);
+    if (!(lh.pdf > 0.0)) return;
+    float w = 1.0;
+    if (technique == TECHNIQUE_MIS && !s.delta) {
+        bool infinite = l.kind == LIGHT_DOME || l.kind == LIGHT_SUN;
+        float n_l = !many || (tree && infinite)
+            ? float(light_count_for(l, sh.p, n_max))
+            : tree
+            ? float(n_max) * light_tree_pmf(frame.light_tree, frame.light_trails, sh.p, sh.n, id)
+            : float(n_max) * light_importance(l, sh.p, sh.n) / total_importance;
+        w = mis_power(float(n_b), s.pdf, n_l, lh.pdf);
+    }
+    vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
+    shadow_candidate(s.wi, lh.t, c, rng);
+}
+
+// Samples come in groups, in this order: the light samples of each round (a looped light, or one
+// pick from the tree or the scan), a closing group (the picks' resampling), then the BRDF samples
+// of each lobe (specular ones, and the diffuse lobe where it is BRDF-sampled). One loop iteration
+// makes at most one shadow ray (a light sample; a BRDF sample and the first light it crosses, or
+// the next one; a pick of a resampling flush) and traces it: the only call site (shadow.glsl).
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
@@ -405,121 +369,117 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     }
     vec3 result = vec3(0.0);
 
-    // Light samples.
-    if (technique != TECHNIQUE_BRDF) {
-        // The tree: first a loop over the infinite lights, then n_max picks from the tree.
-        uint looped = tree ? frame.infinite_count : 0u;
-        uint rounds = many ? looped + n_max : nlights;
-        for (uint r = 0u; r < rounds; ++r) {
-            uint li = r;
-            float n_l;       // expected samples of this light per shading point
-            uint count;      // samples drawn now
-            bool picked = many && r >= looped;
-            if (tree && r < looped) li = LightRefRef(frame.light_refs).v[frame.infinite_first + r];
-            if (picked && tree) {
-                float pmf = light_tree_walk(frame.light_tree, sh.p, sh.n, true, 0u, rng, li);
-                if (!(pmf > 0.0)) continue;
-                n_l = float(n_max) * pmf;
-                count = 1u;
-            } else if (picked) {
-                // Pick one light by importance (inverse CDF over the lights).
-                float u = rng_next(rng) * total_importance, acc = 0.0;
-                li = nlights - 1u;
-                for (uint i = 0u; i < nlights; ++i) {
-                    acc += light_importance(get_light(i), sh.p, sh.n);
-                    if (u < acc) { li = i; break; }
-                }
-                n_l = float(n_max) * light_importance(get_light(li), sh.p, sh.n) / total_importance;
-                count = 1u;
-            }
-            GpuLight l = light_seen_from(sh, li);
-            if (!light_reaches(l)) continue;
-            if (!picked) {
-                count = light_count_for(l, sh.p, n_max);
-                n_l = float(count);
-            }
-            bool cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
-            vec3 cv_sv = vec3(0.0), cv_so = vec3(0.0);
-            float cv_vis = 0.0, cv_tr = 0.0;
-            for (uint j = 0u; j < count; ++j) {
-                LightSample ls = sample_light(l, dome, sh.p, rng_next2(rng));
-                if (!(ls.pdf > 0.0)) continue;
-                vec3 le = light_radiance(l, ls.uv, ls.delta);
-                vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, n_b);
-                // Divide by the expected count n_l (many lights: the selection probability is in it).
-                vec3 c = f * le / (ls.pdf * n_l);
-                if (cv) {
-                    // g_j / (rho / pi), zero exactly where eval_lobes (and so c) is. V_j is the
-                    // ray's answer, also where c is 0 (a black texel): V_j must not depend on L.
-                    float cs = dot(sh.n, ls.wi);
-                    float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
-                    if (s > 0.0) {
-                        vec3 g = s * control_radiance(l, dome, ls.wi);
-                        cv_tr += 1.0;
-                        if (shadowed(sh, ls.wi, ls.dist, vec3(1.0)).r > 0.0) {
-                            cv_vis += 1.0;
-                            cv_sv += g;
-                            result += c;
-                        } else {
-                            cv_so += g;
-                        }
+    // The tree: first a loop over the infinite lights, then n_max picks from the tree.
+    uint looped = tree ? frame.infinite_count : 0u;
+    uint rounds = technique == TECHNIQUE_BRDF ? 0u : many ? looped + n_max : nlights;
+    uint lobes = min(m.lobe_count, 2u);
+    bool diffuse_brdf = technique == TECHNIQUE_BRDF || diffuse_mis;
+    uint groups = rounds + 1u + (technique == TECHNIQUE_LIGHT ? 0u : lobes + 1u);
+    uint g = 0u;          // the group
+    bool opened = false;  // whether g's setup below has run
+    uint j = 0u, count = 0u;   // the next sample of g, and g's samples (0: none)
+    bool close = false;   // whether g ends with shadow_group_end
+    GpuLight l;           // a light round's light
+    float n_l = 0.0;      // its expected samples per shading point
+    bool cv = false;      // with a control variate
+    vec3 cv_sv = vec3(0.0), cv_so = vec3(0.0);
+    float cv_vis = 0.0, cv_tr = 0.0;
+    bool closed = false;  // whether g's closing flush has started
+    BrdfDir bdir;         // a BRDF sample's direction, and the lights it crosses still to do
+    uint ids[DIRECT_MAX_CROSSED];
+    uint crossed = 0u, q = 0u;
+    while (g < groups) {
+        if (!opened) {
+            opened = true;
+            j = 0u;
+            count = 0u;
+            close = false;
+            cv = false;
+            cv_sv = cv_so = vec3(0.0);
+            cv_vis = cv_tr = 0.0;
+            closed = false;
+            crossed = q = 0u;
+            if (g < rounds) {
+                uint li = g;
+                bool picked = many && g >= looped;
+                bool reached = true;
+                if (tree && g < looped) li = LightRefRef(frame.light_refs).v[frame.infinite_first + g];
+                if (picked && tree) {
+                    float pmf = light_tree_walk(frame.light_tree, sh.p, sh.n, true, 0u, rng, li);
+                    reached = pmf > 0.0;
+                    n_l = float(n_max) * pmf;
+                } else if (picked) {
+                    // Pick one light by importance (inverse CDF over the lights).
+                    float u = rng_next(rng) * total_importance, acc = 0.0;
+                    li = nlights - 1u;
+                    for (uint i = 0u; i < nlights; ++i) {
+                        acc += light_importance(get_light(i), sh.p, sh.n);
+                        if (u < acc) { li = i; break; }
                     }
-                } else {
-                    result += shadow_candidate(sh, ls.wi, ls.dist, c, rng);
+                    n_l = float(n_max) * light_importance(get_light(li), sh.p, sh.n) / total_importance;
+                }
+                if (reached) {
+                    l = light_seen_from(sh, li);
+                    reached = light_reaches(l);
+                }
+                if (reached) {
+                    count = picked ? 1u : light_count_for(l, sh.p, n_max);
+                    if (!picked) n_l = float(count);
+                    close = !picked;
+                    cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
+                }
+            } else if (g == rounds) {
+                close = technique != TECHNIQUE_BRDF;
+            } else {
+                bool diffuse = g - rounds - 1u == lobes;
+                if (!diffuse || (diffuse_brdf && max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0)) {
+                    count = n_b;
+                    close = true;
                 }
             }
-            if (cv) result += control_variate(sh, l, dome, float(count), cv_sv, cv_so, cv_vis, cv_tr);
-            if (!picked) result += shadow_group_end(sh, rng);
         }
-        result += shadow_group_end(sh, rng);
-    }
-
-    // BRDF samples: each specular lobe, and the diffuse lobe where it is BRDF-sampled; every light
-    // the direction crosses contributes (the pruning: a sample that hits none traces nothing).
-    if (technique != TECHNIQUE_LIGHT) {
-        uint lobes = min(m.lobe_count, 2u);
-        bool diffuse_brdf = technique == TECHNIQUE_BRDF || diffuse_mis;
-        for (uint k = 0u; k < lobes + 1u; ++k) {
-            bool diffuse = k == lobes;
-            if (diffuse && (!diffuse_brdf || max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) <= 0.0)) continue;
-            for (uint j = 0u; j < n_b; ++j) {
-                vec3 wi, weight;
-                float pdf;
-                bool delta = false;
-                vec2 u = rng_next2(rng);
-                if (diffuse) {
-                    vec3 c = cosine_hemisphere(u);
-                    wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-                    pdf = c.z * INV_PI;
-                    weight = sh.albedo;
+        g_ray_on = false;
+        if (g_fl_on && !shadow_flush_next()) {
+            result += g_fl_part;
+            shadow_flush_done();
+        }
+        if (!g_fl_on) {
+            // The next light a BRDF sample crosses, else the next sample, else the group's end.
+            bool cross = q < crossed;
+            if (!cross && j < count) {
+                j += 1u;
+                if (g < rounds) {
+                    direct_light_sample(sh, m, l, dome, n_l, cv, cv_tr, rng);
                 } else {
-                    BrdfSample bs = brdf_sample(m.lobes[k], sh.n, sh.t, sh.b, sh.v, u);
-                    if (!bs.valid) continue;
-                    wi = bs.wi; weight = bs.weight; pdf = bs.pdf; delta = bs.delta;
+                    crossed = direct_brdf_sample(sh, m, g - rounds - 1u, rng, bdir, ids);
+                    q = 0u;
+                    cross = crossed > 0u;
                 }
-                if (!(pdf > 0.0) || dot(wi, sh.ng) <= 0.0) continue;
-                uint ids[DIRECT_MAX_CROSSED];
-                uint crossed = lights_along(sh.p, wi, ids);
-                for (uint q = 0u; q < crossed; ++q) {
-                    GpuLight l = light_seen_from(sh, ids[q]);
-                    if (!light_reaches(l)) continue;
-                    LightHit lh = light_hit(l, dome, sh.p, wi);
-                    if (!(lh.pdf > 0.0)) continue;
-                    float w = 1.0;
-                    if (technique == TECHNIQUE_MIS && !delta) {
-                        bool infinite = l.kind == LIGHT_DOME || l.kind == LIGHT_SUN;
-                        float n_l = !many || (tree && infinite)
-                            ? float(light_count_for(l, sh.p, n_max))
-                            : tree
-                            ? float(n_max) * light_tree_pmf(frame.light_tree, frame.light_trails, sh.p, sh.n, ids[q])
-                            : float(n_max) * light_importance(l, sh.p, sh.n) / total_importance;
-                        w = mis_power(float(n_b), pdf, n_l, lh.pdf);
-                    }
-                    vec3 c = weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
-                    result += shadow_candidate(sh, wi, lh.t, c, rng);
+            } else if (!cross && !closed) {
+                closed = true;
+                if (close) shadow_group_end(rng);
+            } else if (!cross) {
+                if (cv) result += control_variate(sh, l, dome, float(count), cv_sv, cv_so, cv_vis, cv_tr);
+                g += 1u;
+                opened = false;
+            }
+            if (cross) direct_brdf_light(sh, dome, bdir, ids[q++], many, tree, total_importance, rng);
+        }
+        if (g_ray_on) {
+            // The one shadow-ray call site.
+            bool visible = shadow_visible(sh, g_ray_w, g_ray_dist);
+            if (g_ray_cv >= 0.0) {
+                // g_j / (rho / pi): the ray came from this light round's direct_light_sample().
+                vec3 gj = g_ray_cv * control_radiance(l, dome, g_ray_w);
+                if (visible) {
+                    cv_vis += 1.0;
+                    cv_sv += gj;
+                } else {
+                    cv_so += gj;
                 }
             }
-            result += shadow_group_end(sh, rng);
+            if (visible && g_ray_flush) g_fl_part += g_ray_c;
+            else if (visible) result += g_ray_c;
         }
     }
     return result;
