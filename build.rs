@@ -116,7 +116,7 @@ fn compile(
     // No spirv-opt: its inlining hands the driver one function holding a copy of every callee per
     // call site (the full kernel: 2.7 MB) before specialization constants can drop the unused
     // ones, and lavapipe's SPIR-V-to-NIR step took 3.5 times as long on it; the driver inlines
-    // and optimizes itself, and the kernels run as fast (docs/performance.md, "Kernel
+    // and optimizes itself, and the kernels run as fast (docs/performance-kernels.md, "Kernel
     // compilation").
     opts.set_optimization_level(shaderc::OptimizationLevel::Zero);
     opts.set_generate_debug_info();

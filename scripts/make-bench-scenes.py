@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the dome benchmark scenes of issue 15 (docs/performance.md, "Dome sampling"):
+"""Writes the dome benchmark scenes of issue 15 (docs/performance-sampling.md, "The dome path"):
 scenes/bench/dome.json (a procedural HDR sky with a small bright sun over diffuse and glossy spheres),
 scenes/bench/rect.json (the same spheres under one rect light, the no-regression check),
 scenes/bench/lights64.json (the same spheres under 32 sphere and 32 rect lights, issue 15's

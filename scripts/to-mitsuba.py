@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Converts an illum scene (docs/scene-format.md) into a Mitsuba 3 scene dict, for measurement only
-(docs/performance.md, "Against Mitsuba 3 at equal time"); Mitsuba is not a dependency of illum.
+(docs/performance-sampling.md, "Against Mitsuba 3 at equal time"); Mitsuba is not a dependency of illum.
 
 The conventions are the ones docs/scene-format.md shares with Mitsuba 3: radiance in W m^-2 sr^-1,
 one-sided area emitters, +Y up, vertical fov, alpha roughness. What has no exact Mitsuba 3

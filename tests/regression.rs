@@ -55,7 +55,7 @@ fn same_seed_same_image_across_refactors() {
     let mut checked = 0;
     for trace in traces {
         // The sample allocation is pinned: a change of the defaults (chosen by measurement,
-        // docs/performance.md) must not change the stored hashes.
+        // docs/performance-sampling.md) must not change the stored hashes.
         let settings = RenderSettings {
             spp: 16,
             seed: 11,

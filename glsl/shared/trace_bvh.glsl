@@ -23,7 +23,7 @@ layout(scalar, binding = BINDING_BVH) uniform BvhBlock { BvhHeader bvh; };
 // Nodes (BvhNode), triangles (BvhTriangle, 40 bytes) and instances are read as 64-bit words, two
 // fields per load: lavapipe issues one gather, or 8 scalar loads, per word whatever its width, so
 // this halves the loads (1.4-1.5x rays per CPU-second where loads are lane by lane, as in Mesa 22
-// or without AVX-512; the same with AVX-512 gathers: docs/performance.md, "Trace throughput").
+// or without AVX-512; the same with AVX-512 gathers: docs/performance-kernels.md, "Trace throughput").
 layout(buffer_reference, scalar, buffer_reference_align = 8) readonly buffer BvhWordRef { uint64_t v[]; };
 uvec2 bvh_word(BvhWordRef p, uint i) { return unpackUint2x32(p.v[i]); }
 vec4 bvh_row(BvhWordRef p, uint i) { return uintBitsToFloat(uvec4(bvh_word(p, i), bvh_word(p, i + 1u))); }

@@ -26,7 +26,7 @@ pub struct CompareArgs {
     pub integrators: Vec<String>,
     /// Sample allocations to compare, comma separated: L/B (light samples / BRDF samples per
     /// lobe, diffuse MIS as --diffuse-mis says), L/B/dmis (diffuse MIS on) or L/B/nodmis (off),
-    /// e.g. 4/2/nodmis,1/1/dmis: how the defaults were chosen (docs/performance.md). Each renders
+    /// e.g. 4/2/nodmis,1/1/dmis: how the defaults were chosen (docs/performance-sampling.md). Each renders
     /// with each technique and integrator. [default: the one the options name]
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_samples)]
     pub samples: Vec<Samples>,

@@ -201,7 +201,7 @@ impl ComputePipeline {
 }
 
 /// ILLUM_KERNEL_TIMES=1: each pipeline creation says on stderr how long it took (measuring the
-/// driver's compile time, docs/performance.md).
+/// driver's compile time, docs/performance-kernels.md).
 pub fn kernel_times() -> bool {
     std::env::var("ILLUM_KERNEL_TIMES").is_ok_and(|v| v != "0" && !v.is_empty())
 }

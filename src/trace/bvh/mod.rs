@@ -42,7 +42,7 @@
 //! index, no padding) and instances as 64-bit words, two fields per load: 1.4-1.5x rays per
 //! CPU-second where lavapipe loads lane by lane (Mesa 22; Mesa 25 without AVX-512), the same with
 //! AVX-512 gathers, 12 % less BLAS memory. Figures, profile and what was dropped:
-//! docs/performance.md, "Trace throughput (issue 15 item 5)".
+//! docs/performance-kernels.md, "Trace throughput (issue 15 item 5)".
 
 pub mod builder;
 pub mod nodes;
