@@ -119,19 +119,8 @@ fn textured_triangle(scale: f64, shapes: &str, texels: [f32; 4]) -> Scene {
     sc
 }
 
-fn render_scene(
-    renderer: &Renderer,
-    sc: &Scene,
-    s: &RenderSettings,
-    seeds: &[u64],
-) -> Vec<RenderOutput> {
-    renderer
-        .render_seeds(sc, s, seeds, &mut |_, _| {})
-        .unwrap_or_else(|e| panic!("render failed: {e}"))
-}
-
 fn render(renderer: &Renderer, json: &str, s: &RenderSettings, seeds: &[u64]) -> Vec<RenderOutput> {
-    render_scene(renderer, &scene(json), s, seeds)
+    render_seeds(renderer, &scene(json), s, seeds)
 }
 
 #[test]
@@ -212,7 +201,7 @@ fn fully_lit_plane_has_zero_variance() {
             &[ControlVariates::Loo]
         };
         for &cv in forms {
-            let outs = render_scene(&renderer, &sc, &settings(cv, 2), &[3, 4]);
+            let outs = render_seeds(&renderer, &sc, &settings(cv, 2), &[3, 4]);
             let mut worst = 0.0f64;
             for o in &outs {
                 for p in &o.film.beauty {
@@ -235,7 +224,7 @@ fn fully_lit_plane_has_zero_variance() {
         if !matches!(name, "rect" | "disk" | "sphere") {
             continue;
         }
-        let plain = render_scene(&renderer, &sc, &settings(ControlVariates::Off, 2), &[1, 2]);
+        let plain = render_seeds(&renderer, &sc, &settings(ControlVariates::Off, 2), &[1, 2]);
         // Its mean, with the standard error from the scatter of its (independent) pixels.
         let xs: Vec<f64> = plain
             .iter()
@@ -288,13 +277,13 @@ fn leave_one_out_is_unbiased_in_a_penumbra() {
     let seeds = |base: u64| (0..16).map(|j| base * 64 + j).collect::<Vec<u64>>();
     for (c, (name, sc)) in scenes.iter().enumerate() {
         let base = 1 + 2 * c as u64;
-        let plain = stats(&render_scene(
+        let plain = stats(&render_seeds(
             &renderer,
             sc,
             &settings(ControlVariates::Off, 4),
             &seeds(base),
         ));
-        let loo = stats(&render_scene(
+        let loo = stats(&render_seeds(
             &renderer,
             sc,
             &settings(ControlVariates::Loo, 4),
@@ -341,15 +330,7 @@ fn fully_shadowed_plane_is_black() {
     assert!(json.contains("sheet"));
     for cv in [ControlVariates::AvgVis, ControlVariates::Loo] {
         let outs = render(&renderer, &json, &settings(cv, 2), &[5, 6]);
-        for o in &outs {
-            for p in &o.film.beauty {
-                assert_eq!(*p, [0.0; 3], "{}: a shadowed pixel is lit", cv.name());
-            }
-            assert!(
-                o.stats.rays > u64::from(W * H * 2),
-                "shadow rays were traced"
-            );
-        }
+        assert_shadowed_black(&outs, W, H, cv.name());
     }
     assert_no_validation_messages(&ctx);
 }
@@ -379,9 +360,9 @@ fn lights_picked_from_the_tree_take_no_control() {
     );
     assert!(json.contains("l71"));
     let sc = scene(&json);
-    let off = render_scene(&renderer, &sc, &settings(ControlVariates::Off, 2), &[7]);
+    let off = render_seeds(&renderer, &sc, &settings(ControlVariates::Off, 2), &[7]);
     // Loo only: avgvis takes the same branch (each render compiles a kernel: CI time).
-    let on = render_scene(&renderer, &sc, &settings(ControlVariates::Loo, 2), &[7]);
+    let on = render_seeds(&renderer, &sc, &settings(ControlVariates::Loo, 2), &[7]);
     assert_eq!(
         on[0].film.beauty, off[0].film.beauty,
         "tree-picked lights changed"

@@ -74,9 +74,7 @@ fn average_visibility_bias_is_minus_cov_over_n() {
             },
             ..Default::default()
         };
-        let outs = renderer
-            .render_seeds(&scene, &s, &[11, 12, 13, 14], &mut |_, _| {})
-            .unwrap_or_else(|e| panic!("render failed: {e}"));
+        let outs = render_seeds(&renderer, &scene, &s, &[11, 12, 13, 14]);
         let xs: Vec<f64> = outs
             .iter()
             .flat_map(|o| o.film.beauty.iter().map(|p| luminance(*p)))

@@ -77,17 +77,6 @@ fn sky(json: &str) -> Scene {
     })
 }
 
-fn render(
-    renderer: &Renderer,
-    sc: &Scene,
-    s: &RenderSettings,
-    seeds: &[u64],
-) -> Vec<illum::render::RenderOutput> {
-    renderer
-        .render_seeds(sc, s, seeds, &mut |_, _| {})
-        .unwrap_or_else(|e| panic!("render failed: {e}"))
-}
-
 #[test]
 fn dome_fully_lit_plane_has_zero_variance() {
     let ctx = context();
@@ -116,7 +105,7 @@ fn dome_fully_lit_plane_has_zero_variance() {
             ControlVariates::AvgVis,
             ControlVariates::Loo,
         ] {
-            let outs = render(&renderer, &sc, &settings(cv, 2, 32), &[3, 4]);
+            let outs = render_seeds(&renderer, &sc, &settings(cv, 2, 32), &[3, 4]);
             let worst = outs
                 .iter()
                 .flat_map(|o| o.film.beauty.iter())
@@ -146,15 +135,8 @@ fn dome_fully_shadowed_plane_is_black() {
     let ball = r#", "ball": {"sphere": {"center": [0, 0, 0], "radius": 5}, "material": "m"}"#;
     let sc = sky(&dome_scene([0.0, 1.0, 0.0], ball));
     for cv in [ControlVariates::AvgVis, ControlVariates::Loo] {
-        for o in render(&renderer, &sc, &settings(cv, 2, 4), &[5]) {
-            for p in &o.film.beauty {
-                assert_eq!(*p, [0.0; 3], "{}: a shadowed pixel is lit", cv.name());
-            }
-            assert!(
-                o.stats.rays > u64::from(W * H * 2),
-                "shadow rays were traced"
-            );
-        }
+        let outs = render_seeds(&renderer, &sc, &settings(cv, 2, 4), &[5]);
+        assert_shadowed_black(&outs, W, H, cv.name());
     }
     assert_no_validation_messages(&ctx);
 }
@@ -173,24 +155,12 @@ fn dome_leave_one_out_is_unbiased_with_a_black_ground() {
     assert!(json.contains(r#""material": "g""#));
     let sc = sky(&json);
     let seeds = |base: u64| (0..16).map(|j| base * 64 + j).collect::<Vec<u64>>();
-    let plain = block_stats(
-        &render(
-            &renderer,
-            &sc,
-            &settings(ControlVariates::Off, 4, 4),
-            &seeds(1),
-        ),
-        4,
-    );
-    let loo = block_stats(
-        &render(
-            &renderer,
-            &sc,
-            &settings(ControlVariates::Loo, 4, 4),
-            &seeds(2),
-        ),
-        4,
-    );
+    let [plain, loo] = [(ControlVariates::Off, 1), (ControlVariates::Loo, 2)].map(|(cv, base)| {
+        block_stats(
+            &render_seeds(&renderer, &sc, &settings(cv, 4, 4), &seeds(base)),
+            4,
+        )
+    });
     let lit = plain.last().unwrap().0;
     assert!(lit > 0.1, "the wall is dark: {lit}");
     let per = 1.0 - (1.0 - 1e-3f64).powf(1.0 / loo.len() as f64);

@@ -149,6 +149,27 @@ fn render_and_release(ctx: illum::vk::Context, device: ash::Device, trace: Trace
     }
 }
 
+/// Records samples [first, first + count) into the host's frame command buffer `cmd`.
+fn record(
+    session: &mut illum::render::RenderSession,
+    cmd: vk::CommandBuffer,
+    first: u32,
+    count: u32,
+) {
+    // SAFETY: the host's command buffer is recording, outside its render pass; the frame waits
+    // for it before the session goes.
+    unsafe {
+        session.record_pass(
+            cmd,
+            &Pass {
+                first_sample: first,
+                sample_count: count,
+            },
+        )
+    }
+    .unwrap()
+}
+
 #[test]
 fn renders_on_an_application_device_without_ray_queries() {
     let app = App::new();
@@ -279,20 +300,7 @@ fn record_pass_in_a_host_frame_equals_the_render_bit_for_bit() {
             .session(&mut prepared, &scene.camera, &settings, host.target())
             .unwrap();
         let pass = |session: &mut illum::render::RenderSession, first, count| {
-            host.frame(|cmd| {
-                // SAFETY: the host's command buffer is recording, outside its render pass; the
-                // frame waits for it before the session goes.
-                unsafe {
-                    session.record_pass(
-                        cmd,
-                        &Pass {
-                            first_sample: first,
-                            sample_count: count,
-                        },
-                    )
-                }
-                .unwrap()
-            })
+            host.frame(|cmd| record(session, cmd, first, count))
         };
         let mut images = vec![
             pass(&mut session, 0, 1),
@@ -433,19 +441,7 @@ fn sessions_with_aov_planes_equal_the_render_bit_for_bit() {
                     .unwrap();
             }
             let pass = |session: &mut illum::render::RenderSession, first, count| {
-                host.frame_all(|cmd| {
-                    // SAFETY: recording, outside the host's render pass; the frame waits.
-                    unsafe {
-                        session.record_pass(
-                            cmd,
-                            &Pass {
-                                first_sample: first,
-                                sample_count: count,
-                            },
-                        )
-                    }
-                    .unwrap()
-                })
+                host.frame_all(|cmd| record(session, cmd, first, count))
             };
             let mut images = vec![pass(&mut session, 0, 1), pass(&mut session, 1, 3)];
             session.set_camera(&moved).unwrap();

@@ -115,7 +115,7 @@ pub fn run(a: &BenchLightsArgs) -> Result<()> {
 fn mean_luminance(image: &[[f32; 3]]) -> f64 {
     let sum: f64 = image
         .iter()
-        .map(|p| crate::gpu_scene::dome::luminance(glam::Vec3::from(*p)))
+        .map(|p| crate::gpu_scene::dome::luminance(glam::Vec3::from(*p).as_dvec3()))
         .sum();
     sum / image.len().max(1) as f64
 }

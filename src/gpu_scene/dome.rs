@@ -26,7 +26,7 @@
 
 use crate::layout::GpuDomeSampling;
 use crate::scene::{DomeConvention, Texture, TextureFilter};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// Host side of [`GpuDomeSampling`]: the CDF tables of one map.
 #[derive(Clone, Debug)]
@@ -48,8 +48,8 @@ pub struct DomeTable {
 }
 
 /// Luminance weights of linear RGB (Rec. 709), as `luminance()` in glsl/shared/common.glsl.
-pub fn luminance(c: Vec3) -> f64 {
-    0.2126 * f64::from(c.x) + 0.7152 * f64::from(c.y) + 0.0722 * f64::from(c.z)
+pub fn luminance(c: DVec3) -> f64 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 /// The cell grid of a map of `width` x `height` texels under `convention`: (columns, rows).
@@ -72,7 +72,8 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
         th,
         texture.texels.len()
     );
-    let lum = |i: i64, j: i64| luminance(tint * texture.texel(i, j).truncate()).max(0.0);
+    let lum =
+        |i: i64, j: i64| luminance((tint * texture.texel(i, j).truncate()).as_dvec3()).max(0.0);
     let (cw, ch) = cells(convention, texture.width, texture.height);
     let (w, h) = (cw as usize, ch as usize);
     // Solid angle per unit map area at the centre of row j (up to a constant factor).

@@ -20,7 +20,7 @@
 //! exact for any coefficients, because the kernel's G is the SH9 irradiance of the same L_SH that its
 //! samples evaluate (Funk-Hecke: exact for a band-limited function).
 
-use super::dome::{self, DomeTable};
+use super::dome::{self, DomeTable, luminance};
 use crate::scene::dome_map;
 use crate::scene::{DomeConvention, Light, LightKind, Texture};
 use glam::{DVec2, DVec3};
@@ -64,11 +64,6 @@ pub fn irradiance(c: &[DVec3; 9], n: DVec3) -> DVec3 {
         .zip(BAND)
         .map(|((y, c), l)| *c * (a[l] * y))
         .sum()
-}
-
-/// Rec. 709 luminance, as `luminance()` in glsl/shared/common.glsl.
-fn luminance(c: DVec3) -> f64 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
 /// The most luminance the projection takes of a point of the map: `SH_CLAMP` times the map's

@@ -298,12 +298,15 @@ mod tests {
         // Bilinear with repeat over the whole square: exactly the texel mean.
         let t = tex(TextureFilter::Bilinear, TextureWrap::Repeat);
         let m = surface_mean(&t, Parametrization::Rect);
-        let texels = t
-            .texels
+        let texels = texel_mean(&t);
+        assert!((m - texels).abs().max_element() < 1e-12, "{m} vs {texels}");
+    }
+
+    fn texel_mean(t: &Texture) -> DVec3 {
+        t.texels
             .iter()
             .fold(DVec3::ZERO, |a, v| a + v.truncate().as_dvec3())
-            / 12.0;
-        assert!((m - texels).abs().max_element() < 1e-12, "{m} vs {texels}");
+            / t.texels.len() as f64
     }
 
     #[test]
@@ -334,11 +337,7 @@ mod tests {
         let t = tex(TextureFilter::Bilinear, TextureWrap::Repeat);
         let (p00, p10, p11, p01) = (DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y);
         let m = 0.5 * (triangle_mean(&t, [p00, p10, p11]) + triangle_mean(&t, [p00, p11, p01]));
-        let texels = t
-            .texels
-            .iter()
-            .fold(DVec3::ZERO, |a, v| a + v.truncate().as_dvec3())
-            / 12.0;
+        let texels = texel_mean(&t);
         assert!((m - texels).abs().max_element() < 1e-12, "{m} vs {texels}");
         // No UVs: every point reads uv (0, 0).
         let z = triangle_mean(&t, [DVec2::ZERO; 3]);

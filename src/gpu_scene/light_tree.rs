@@ -59,7 +59,7 @@ pub fn light_bounds_of(l: &GpuLight, mean_texel: &dyn Fn(u32) -> Vec3) -> Option
     let (p1, p2) = (d3(&l.p1), d3(&l.p2[..3]));
     // Emitted power of a Lambertian emitter: pi A L per side.
     let sides = if two_sided { 2.0 } else { 1.0 };
-    let power = PI * f64::from(l.area) * luminance(radiance) * sides;
+    let power = PI * f64::from(l.area) * luminance(radiance.as_dvec3()) * sides;
     let (axis, theta_o) = match l.kind {
         LIGHT_SPHERE => (DVec3::Z, PI),
         LIGHT_DISK => (p1.normalize_or_zero(), 0.0),

@@ -56,6 +56,32 @@ pub fn render_with(ctx: &Context, scene: &Scene, spp: u32, seed: u64) -> RenderO
         .unwrap_or_else(|e| panic!("render failed: {e}"))
 }
 
+/// One render per seed with the same renderer (its kernels compiled once).
+pub fn render_seeds(
+    renderer: &Renderer,
+    scene: &Scene,
+    s: &RenderSettings,
+    seeds: &[u64],
+) -> Vec<RenderOutput> {
+    renderer
+        .render_seeds(scene, s, seeds, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("render failed: {e}"))
+}
+
+/// Every pixel of every render exactly black, and shadow rays traced (more than two per pixel of
+/// a `w` x `h` image): a fully shadowed scene.
+pub fn assert_shadowed_black(outs: &[RenderOutput], w: u32, h: u32, name: &str) {
+    for o in outs {
+        for p in &o.film.beauty {
+            assert_eq!(*p, [0.0; 3], "{name}: a shadowed pixel is lit");
+        }
+        assert!(
+            o.stats.rays > u64::from(w * h * 2),
+            "{name}: shadow rays were traced"
+        );
+    }
+}
+
 /// Renders on a fresh validated context and checks that validation stayed silent.
 pub fn render(json: &str, spp: u32) -> RenderOutput {
     let ctx = context();

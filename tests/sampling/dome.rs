@@ -83,7 +83,7 @@ fn dome_case(
         let lum = |i: i64, j: i64| {
             let t =
                 tex.texels[(j.rem_euclid(h as i64) * w as i64 + i.rem_euclid(w as i64)) as usize];
-            dome::luminance(tint * t.truncate()).max(0.0)
+            dome::luminance((tint * t.truncate()).as_dvec3()).max(0.0)
         };
         let k = [0.125, 0.75, 0.125];
         let mut weights = vec![0.0; (w * h) as usize];
