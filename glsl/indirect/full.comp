@@ -115,26 +115,10 @@ void main() {
                 thr_d = vec3(1.0);
                 vertex_d = 0u;
                 diffuse_over = true;
-                if (max3(sh.albedo) > 0.0) {
-                    vec3 c = cosine_hemisphere(rng_next2(rng));
-                    d = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-                    diffuse_over = !(c.z > 0.0) || dot(d, sh.ng) <= 0.0;
-                }
+                if (max3(sh.albedo) > 0.0) diffuse_over = !diffuse_direction(sh, rng, d);
             } else if (shade) {
                 // A diffuse vertex of the chain: its direct light, then the next bounce.
-                sum_d += thr_d * dl;
-                vec3 c = cosine_hemisphere(rng_next2(rng));
-                d = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-                diffuse_over = !(c.z > 0.0) || dot(d, sh.ng) <= 0.0;
-                if (!diffuse_over) {
-                    thr_d *= sh.albedo;
-                    if (vertex_d >= 2u) {
-                        float q = min(max3(thr_d), 0.95);
-                        diffuse_over = rng_next(rng) >= q;
-                        thr_d /= q;
-                    }
-                }
-                vertex_d += 1u;
+                diffuse_over = !diffuse_chain_next(sh, dl, sum_d, thr_d, vertex_d, rng, d);
             }
             if (diffuse_over) {
                 // Back at the specular vertex: its indirect diffuse, then the next reflection.

@@ -26,6 +26,33 @@
 
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
+// A cosine-distributed direction about sh.n; false where it is not above both sh.n's and
+// sh.ng's horizons (no bounce).
+bool diffuse_direction(Shading sh, inout Rng rng, out vec3 wi) {
+    vec3 c = cosine_hemisphere(rng_next2(rng));
+    wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+    return c.z > 0.0 && dot(wi, sh.ng) > 0.0;
+}
+
+// A vertex of a diffuse chain (full's brute-force fallback, the cache's update paths): adds its
+// direct light dl to sum with throughput thr, draws the next direction wi; false when the chain
+// ends there (below a horizon, or Russian roulette from the third vertex on).
+bool diffuse_chain_next(Shading sh, vec3 dl, inout vec3 sum, inout vec3 thr, inout uint vertex,
+                        inout Rng rng, out vec3 wi) {
+    sum += thr * dl;
+    bool go = diffuse_direction(sh, rng, wi);
+    if (go) {
+        thr *= sh.albedo;
+        if (vertex >= 2u) {
+            float q = min(max3(thr), 0.95);
+            go = rng_next(rng) < q;
+            thr /= q;
+        }
+    }
+    vertex += 1u;
+    return go;
+}
+
 // Spread angle of a camera ray's cone: one pixel's height.
 float pixel_spread() { return 2.0 * length(frame.cam_up.xyz) / float(frame.height); }
 

@@ -137,27 +137,14 @@ void main() {
             sh_v = sh;
             width_v = width;
             next.kind = HIT_NONE;
-            vec3 c = cosine_hemisphere(rng_next2(rng));
-            d = c.x * sh.t + c.y * sh.b + c.z * sh.n;
             o = sh.origin;
-            if (c.z > 0.0 && dot(d, sh.ng) > 0.0) {
+            if (diffuse_direction(sh, rng, d)) {
                 ray = RAY_NEXT;
                 continue;
             }
         } else if (shade) {
-            sum_d += thr_d * dl;
-            vec3 c = cosine_hemisphere(rng_next2(rng));
-            vec3 wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
-            diffuse_over = !(c.z > 0.0) || dot(wi, sh.ng) <= 0.0;
-            if (!diffuse_over) {
-                thr_d *= sh.albedo;
-                if (vertex_d >= 2u) {
-                    float q = min(max3(thr_d), 0.95);
-                    diffuse_over = rng_next(rng) >= q;
-                    thr_d /= q;
-                }
-            }
-            vertex_d += 1u;
+            vec3 wi;
+            diffuse_over = !diffuse_chain_next(sh, dl, sum_d, thr_d, vertex_d, rng, wi);
             if (!diffuse_over) {
                 o = sh.origin;
                 d = wi;
