@@ -26,7 +26,7 @@ ILLUM_TEST_TRACE=bvh cargo test --release --test render --test direct --test rep
 echo "== Debian's stock Mesa 22.3.6 lavapipe: no VK_KHR_ray_query, so the compute BVH"
 # Everything that can differ on this driver (the compute BVH, one sample per dispatch, no
 # ray-query device features, older LLVM). Left out, for CI time: the estimator-only statistics
-# of shadow_rays.rs, control_variates.rs, control_variates_bias.rs and control_variates_dome.rs
+# of shadow_rays.rs, stratified.rs, control_variates.rs, control_variates_bias.rs and control_variates_dome.rs
 # and the cache-against-brute-force comparison of indirect.rs (no trace-path or driver code of
 # their own; they run on Mesa 25 above). The
 # indirect tests that do run here cover the cache's determinism and the furnace.
@@ -35,7 +35,7 @@ tests=()
 for t in tests/*.rs; do
     name=$(basename "$t" .rs)
     case "$name" in
-        shadow_rays | control_variates | control_variates_bias | control_variates_dome) ;;
+        shadow_rays | stratified | control_variates | control_variates_bias | control_variates_dome) ;;
         *) tests+=(--test "$name") ;;
     esac
 done

@@ -1,0 +1,161 @@
+//! Stratified samples (glsl/shared/direct.glsl `stratify`): the light samples of a light and the
+//! BRDF samples of a lobe at a shading point are jittered within the cells of a grid (n strata
+//! along the rows of a textured dome). Each estimator alone must stay unbiased, so each is
+//! checked against a closed form with several samples per group: light samples only and BRDF
+//! samples only on a Lambert floor under a large rect light (the polygon formula), and light
+//! samples only under a textured dome (Gauss-Legendre quadrature of its map). Per-pixel and
+//! image-mean t-tests over BATCHES independent renders (tests/common), family-wise 0.01.
+
+mod common;
+use common::*;
+use glam::DVec3;
+use illum::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::stress::closed_form::{dome_irradiance_quadrature, polygon_irradiance};
+use std::f64::consts::PI;
+use std::path::Path;
+
+const W: u32 = 12;
+const H: u32 = 12;
+const ALBEDO: f64 = 0.5;
+const CAMERA: [f64; 3] = [1.0, 0.3, 0.2];
+const FOV_DEG: f64 = 20.0;
+
+/// A Lambert floor under `light`, seen from a camera below the light (its rays never cross it).
+fn scene_json(light: &str, textures: &str) -> String {
+    let [x, y, z] = CAMERA;
+    format!(
+        r#"{{"camera": {{"position": [{x}, {y}, {z}], "look_at": [0, 0, 0], "fov_y": {FOV_DEG}, "resolution": [{W}, {H}]}},
+            "textures": {{{textures}}},
+            "materials": {{"m": {{"diffuse": [{ALBEDO}, {ALBEDO}, {ALBEDO}]}}}},
+            "shapes": {{"floor": {{"rect": {{"center": [0, 0, 0], "normal": [0, 1, 0], "size": [40, 40]}}, "material": "m"}}}},
+            "lights": {{"l": {light}}}}}"#
+    )
+}
+
+/// Floor points seen through each pixel, on a 4 x 4 grid of sub-pixel positions.
+fn floor_points() -> Vec<Vec<DVec3>> {
+    let pos = DVec3::from_array(CAMERA);
+    let f = (-pos).normalize();
+    let r = f.cross(DVec3::Y).normalize();
+    let u = r.cross(f);
+    let t = (FOV_DEG.to_radians() / 2.0).tan();
+    let mut out = Vec::new();
+    for y in 0..H {
+        for x in 0..W {
+            let mut pts = Vec::new();
+            for j in 0..4 {
+                for i in 0..4 {
+                    let nx = 2.0 * (f64::from(x) + (f64::from(i) + 0.5) / 4.0) / f64::from(W) - 1.0;
+                    let ny = 2.0 * (f64::from(y) + (f64::from(j) + 0.5) / 4.0) / f64::from(H) - 1.0;
+                    let d = (f + nx * r * t - ny * u * t).normalize();
+                    pts.push(pos + d * (-pos.y / d.y));
+                }
+            }
+            out.push(pts);
+        }
+    }
+    out
+}
+
+fn render(
+    scene: &illum::scene::Scene,
+    integrator: IntegratorSettings,
+    spp: u32,
+    seed: u64,
+) -> Batches {
+    let ctx = context();
+    let settings = RenderSettings {
+        spp,
+        seed,
+        trace: trace_mode(),
+        integrator,
+        ..Default::default()
+    };
+    let out = Batches::render(&Renderer::new(ctx.clone()), scene, &settings, BATCHES);
+    assert_no_validation_messages(&ctx);
+    out
+}
+
+/// The floor's radiance ALBEDO E / pi for irradiance E(x), averaged over each pixel's points.
+fn check(b: &Batches, irradiance: impl Fn(DVec3) -> f64) {
+    let pts = floor_points();
+    assert_matches_expectation(
+        b,
+        |i| {
+            let e = pts[i].iter().map(|&p| irradiance(p)).sum::<f64>() / pts[i].len() as f64;
+            [ALBEDO * e / PI; 3]
+        },
+        0.01,
+    );
+}
+
+#[test]
+fn stratified_light_and_brdf_samples_match_the_polygon_formula() {
+    // A 4 x 4 rect 0.4 above the floor: from the floor under it, share = solid angle / 2 pi is
+    // about 0.8, so 4 light samples (a 2 x 2 grid) where the default N_max is 4, 3 (3 x 1) at 3.
+    let (l, h, s) = (2.0, 0.4, 2.0);
+    let corners = [
+        DVec3::new(-s, h, -s),
+        DVec3::new(s, h, -s),
+        DVec3::new(s, h, s),
+        DVec3::new(-s, h, s),
+    ];
+    let irradiance = |p: DVec3| {
+        let rel: Vec<DVec3> = corners.iter().map(|c| *c - p).collect();
+        l * polygon_irradiance(DVec3::Y, &rel)
+    };
+    let scene = scene(&scene_json(
+        &format!(
+            r#"{{"rect": {{"center": [0, {h}, 0], "normal": [0, -1, 0], "size": [{}, {}]}}, "intensity": {l}}}"#,
+            2.0 * s,
+            2.0 * s
+        ),
+        "",
+    ));
+    for (technique, light_samples, brdf_samples) in [
+        (Technique::Light, 4, 1),
+        (Technique::Light, 3, 1),
+        (Technique::Brdf, 4, 4),
+    ] {
+        eprintln!("{technique:?}, {light_samples} light samples, {brdf_samples} BRDF samples");
+        let integrator = IntegratorSettings {
+            technique,
+            light_samples,
+            brdf_samples,
+            ..Default::default()
+        };
+        check(&render(&scene, integrator, 64, 3), irradiance);
+    }
+}
+
+#[test]
+fn stratified_dome_samples_match_the_quadrature_of_the_map() {
+    // scenes/bench/sky.exr: a sky with a small sun ~2000 x brighter. Unoccluded, the floor's
+    // irradiance is the same everywhere.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench");
+    let json = scene_json(
+        r#"{"dome": {}, "texture": "sky", "visible": false}"#,
+        r#""sky": {"file": "sky.exr"}"#,
+    );
+    let scene = illum::scene::from_json_str(&json, "<test scene>", &dir).expect("test scene");
+    let light = &scene.lights[0];
+    let illum::scene::LightKind::Dome {
+        rotation_deg,
+        convention,
+    } = light.kind
+    else {
+        panic!("not a dome")
+    };
+    let texture = &scene.textures[light.texture.expect("textured") as usize];
+    let radiance = light.radiance();
+    let e = dome_irradiance_quadrature(texture, rotation_deg, convention, DVec3::Y)
+        * DVec3::new(radiance.x.into(), radiance.y.into(), radiance.z.into());
+    assert!(e.min_element() > 0.0);
+    let integrator = IntegratorSettings {
+        technique: Technique::Light,
+        light_samples: 4,
+        ..Default::default()
+    };
+    let b = render(&scene, integrator, 256, 6);
+    assert_matches_expectation(&b, |_| (ALBEDO * e / PI).to_array(), 0.01);
+}
