@@ -9,6 +9,9 @@ use common::*;
 use illum::render::{IntegratorSettings, LightSelection, RenderSettings, Renderer};
 use illum::stress::many_lights::{ManyLights, scene_json};
 
+/// A block's summed difference and the (variance, dof) parts of its variance.
+type BlockSum = (f64, Vec<(f64, f64)>);
+
 fn compare(n: usize, w: u32, h: u32, spp_tree: u32, spp_loop: u32) {
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
@@ -52,7 +55,7 @@ fn compare(n: usize, w: u32, h: u32, spp_tree: u32, spp_loop: u32) {
     // bias. A tree pmf wrong over a region still shows in its blocks and in the image mean.
     let dof = f64::from(BATCHES - 1);
     let (bw, bh) = (w.div_ceil(2) as usize, h.div_ceil(2) as usize);
-    let mut blocks: Vec<[(f64, Vec<(f64, f64)>); 3]> = vec![Default::default(); bw * bh];
+    let mut blocks: Vec<[BlockSum; 3]> = vec![Default::default(); bw * bh];
     let (mut sum_d, mut sum_v) = ([0.0; 3], [0.0; 3]);
     let mut parts: [Vec<(f64, f64)>; 3] = [vec![], vec![], vec![]];
     let mut lit = 0;
