@@ -131,19 +131,22 @@ void main() {
             bool shade = false;        // direct lighting at (sh, m)
             bool diffuse_over = false; // the diffuse chain ends here
             bool bounce = false;       // a BRDF-sampled bounce from (sh_s, m_s) follows
+            // The hit's surface and shading: one copy of that code for every kind of ray.
+            Surface s;
+            bool material = false;
+            if (h.kind != HIT_NONE) {
+                s = surface_at(h, o, d);
+                if (s.material != NONE) {
+                    m = get_material(s.material);
+                    sh = shading_at(s, m, d);
+                    material = true;
+                }
+            }
             if (ray == RAY_CAMERA && !update) {
-                if (!film_camera_hit(h, o, d, acc, le, m, sh)) break;
+                film_camera_aovs(h, s, material, sh, d, acc, le);
+                if (!material) break;
                 shade = true;
             } else {
-                bool material = false;
-                if (h.kind != HIT_NONE) {
-                    Surface s = surface_at(h, o, d);
-                    if (s.material != NONE) {
-                        m = get_material(s.material);
-                        sh = shading_at(s, m, d);
-                        material = true;
-                    }
-                }
                 if (ray == RAY_CAMERA) {
                     // Update: the first bounce, from either lobe.
                     if (!material) break;
