@@ -295,7 +295,12 @@ fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() 
     render_seeds(&ctx, &furnace(0.5), &off, &[1]);
     // With the cache or without, the full integrator creates one kernel: its film pass and the
     // cache's update pass are one pipeline (compiled once, glsl/indirect/full.comp).
-    let on = render_seeds(&ctx, &furnace(0.5), &settings(IntegratorKind::Full, 2), &[1]);
+    let on = render_seeds(
+        &ctx,
+        &furnace(0.5),
+        &settings(IntegratorKind::Full, 2),
+        &[1],
+    );
     let updates = on[0]
         .stats
         .integrator
@@ -304,7 +309,11 @@ fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() 
         .map(|(_, v)| v.clone())
         .unwrap_or_default();
     assert!(
-        updates.split(' ').next().and_then(|n| n.parse::<u64>().ok()) > Some(0),
+        updates
+            .split(' ')
+            .next()
+            .and_then(|n| n.parse::<u64>().ok())
+            > Some(0),
         "the cache ran no update paths: {:?}",
         on[0].stats.integrator
     );
