@@ -21,25 +21,36 @@ vec3 film_camera_ray(PassConstants p, uvec2 pix, uint pixel, uint sample_index, 
     return camera_direction(film_uv);
 }
 
+// The camera hit h's AOVs, added to acc, and the emission seen directly (the dome's on a miss),
+// given its surface s and, where `material`, its shading sh.
+void film_camera_aovs(Hit h, Surface s, bool material, Shading sh, vec3 d, inout FilmPixel acc,
+                      out vec3 le) {
+    if (h.kind == HIT_NONE) {
+        le = dome_radiance(d);
+        return;
+    }
+    le = surface_emission(s, d);
+    acc.normal += vec4(s.ns, h.t);
+    if (material) acc.albedo += vec4(sh.albedo, 1.0);
+    else acc.albedo.w += 1.0;
+}
+
 // The camera hit h of ray (o, d): adds its AOVs to acc and returns the emission seen directly
 // (the dome's on a miss). True when the hit has a material: then m and sh are its shading.
 bool film_camera_hit(Hit h, vec3 o, vec3 d, inout FilmPixel acc, out vec3 le, out GpuMaterial m,
                      out Shading sh) {
-    if (h.kind == HIT_NONE) {
-        le = dome_radiance(d);
-        return false;
+    Surface s;
+    bool material = false;
+    if (h.kind != HIT_NONE) {
+        s = surface_at(h, o, d);
+        if (s.material != NONE) {
+            m = get_material(s.material);
+            sh = shading_at(s, m, d);
+            material = true;
+        }
     }
-    Surface s = surface_at(h, o, d);
-    le = surface_emission(s, d);
-    acc.normal += vec4(s.ns, h.t);
-    if (s.material == NONE) {
-        acc.albedo.w += 1.0;
-        return false;
-    }
-    m = get_material(s.material);
-    sh = shading_at(s, m, d);
-    acc.albedo += vec4(sh.albedo, 1.0);
-    return true;
+    film_camera_aovs(h, s, material, sh, d, acc, le);
+    return material;
 }
 
 // Optional firefly clamp of the camera hit's direct lighting (hue-preserving, TECHNIQUES 7.6):

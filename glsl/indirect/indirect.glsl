@@ -1,6 +1,6 @@
 // Indirect lighting (TECHNIQUES.md §6): lobe sampling for path continuation, ray cones, the
 // radiosity cache's lookups, and the outgoing diffuse radiance of a surface with or without the
-// cache. Used by glsl/indirect/{path,full,radiosity_update}.comp (src/render/indirect/).
+// cache. Used by glsl/indirect/{path,full}.comp (src/render/indirect/).
 //
 // Conventions:
 // * Emission is only ever added where a camera ray meets it: every other emitter contribution is
@@ -188,6 +188,6 @@ bool radiosity_lookup(Shading sh, float width, inout Rng rng, out vec3 value) {
 // brute force, a diffuse-only path with next-event estimation at every vertex. Either way Russian
 // roulette ends paths after three bounces in place (at most RADIOSITY_BRUTE_MAX), so a miss costs
 // time, never bias. Indirect diffuse at a vertex: albedo times B along one cosine-sampled ray.
-// The kernels walk it inside their one loop of rays (full.comp, radiosity_update.comp).
+// full.comp walks it inside its one loop of rays, in both of its passes.
 
 #endif

@@ -465,25 +465,36 @@ struct RadiosityEntry {
     uvec2 pad;
 };
 
-// One update sample of the radiosity cache (glsl/indirect/radiosity_update.comp): B at a point,
-// filed under the keys of its cell at RADIOSITY_RECORD_KEYS levels.
+// One update sample of the radiosity cache (the update pass of glsl/indirect/full.comp): B at a
+// point, filed under the keys of its cell at RADIOSITY_RECORD_KEYS levels.
 struct RadiosityRecord {
     vec3 value;
     uint valid;               // 0: no sample (the path ended earlier)
     uvec2 keys[2];
 };
 
-// Push constants of glsl/indirect/radiosity_update.comp.
+// The radiosity cache's update pass of glsl/indirect/full.comp (FullPass.update).
 struct RadiosityPass {
     uint64_t records;         // RadiosityRecord array
-    uint index;               // update index: the sample index it belongs to, or a warm-up round
-    uint rounds;              // consecutive indices in this dispatch (gl_GlobalInvocationID.y)
-    uint seed_lo;
-    uint seed_hi;
-    uint paths;               // update paths per index
+    uint index;               // update index of gl_GlobalInvocationID.z == 0: the sample index it
+                              // belongs to, or a warm-up round; z counts consecutive indices
     uint vertices;            // records per path
-    uint block;               // one path per block x block pixels
+    uint block;               // one path per block x block pixels (gl_GlobalInvocationID.xy)
     uint pad0;
+};
+
+// The passes of the full integrator's one kernel (FullPass.mode): the driver compiles the code
+// they share (traversal, direct lighting, materials) once.
+#define FULL_PASS_FILM 0
+#define FULL_PASS_UPDATE 1
+
+// Push constants of glsl/indirect/full.comp: a film pass (`film`, as for every film kernel) or
+// a radiosity cache update (`update`, with film.seed_lo and film.seed_hi; the rest of `film` 0).
+struct FullPass {
+    PassConstants film;
+    uint mode;                // FULL_PASS_*
+    uint pad0;
+    RadiosityPass update;
 };
 
 #define QUERY_CLOSEST 1

@@ -23,6 +23,7 @@ impl PrimaryKernel {
             "primary",
             (shaders::PRIMARY_RQ, shaders::PRIMARY_BVH),
             false,
+            std::mem::size_of::<PassConstants>(),
         )?;
         Ok(PrimaryKernel { pipeline })
     }
@@ -93,7 +94,8 @@ pub fn configure_direct(it: &IntegratorSettings, frame: &mut Frame) {
 }
 
 /// A kernel over film pixels (frame constants, film, the AOV planes if `aovs`, the trace
-/// structure), with the scene's feature switches and `features` (the settings' own).
+/// structure), with the scene's feature switches and `features` (the settings' own), taking
+/// `push_size` bytes of push constants (PassConstants, or a struct that begins with them).
 pub fn film_pipeline(
     ctx: &Context,
     scene: &PreparedScene,
@@ -101,6 +103,7 @@ pub fn film_pipeline(
     name: &str,
     (rq, bvh): (&'static [u8], &'static [u8]),
     aovs: bool,
+    push_size: usize,
 ) -> Result<ComputePipeline> {
     let mut bindings = vec![
         (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER),
@@ -115,7 +118,7 @@ pub fn film_pipeline(
         name,
         scene.trace.select(rq, bvh),
         &bindings,
-        std::mem::size_of::<PassConstants>() as u32,
+        push_size as u32,
         &[scene.gpu.features | features],
     )?;
     scene.trace.bind(&pipeline);
@@ -133,10 +136,14 @@ pub fn bind_film(pipeline: &ComputePipeline, frame: &Buffer, film: &Buffer, aovs
 
 /// Dispatches a film kernel over the pixels of `pass.tile`.
 pub fn dispatch_tile(pipeline: &ComputePipeline, cmd: vk::CommandBuffer, pass: &PassConstants) {
-    let groups = [
-        pass.tile[2].div_ceil(WORKGROUP_X),
-        pass.tile[3].div_ceil(WORKGROUP_Y),
+    pipeline.dispatch(cmd, bytemuck::bytes_of(pass), tile_groups(pass.tile));
+}
+
+/// The workgroups of a film kernel over the pixels of `tile` (x0, y0, width, height).
+pub fn tile_groups(tile: [u32; 4]) -> [u32; 3] {
+    [
+        tile[2].div_ceil(WORKGROUP_X),
+        tile[3].div_ceil(WORKGROUP_Y),
         1,
-    ];
-    pipeline.dispatch(cmd, bytemuck::bytes_of(pass), groups);
+    ]
 }

@@ -252,7 +252,7 @@ impl RenderSession<'_> {
             return Ok(()); // no cache: nothing to warm up
         }
         let warm = Instant::now();
-        // The warm-up's update kernel reads the frame constants from the buffer.
+        // The warm-up's update pass reads the frame constants from the buffer.
         let (frame, data) = (self.frame.buffer, self.frame_data);
         self.ctx.one_shot(|cmd| {
             // SAFETY: the frame buffer is the session's; one_shot waits for the command buffer.

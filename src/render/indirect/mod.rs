@@ -6,7 +6,7 @@
 
 mod radiosity;
 
-use super::direct::{bind_film, configure_direct, dispatch_tile, film_pipeline};
+use super::direct::{bind_film, configure_direct, dispatch_tile, film_pipeline, tile_groups};
 use super::integrator::{Integrator, IntegratorPasses};
 use super::{IntegratorSettings, PreparedScene, RenderSettings};
 use crate::error::Result;
@@ -56,6 +56,7 @@ impl Integrator for Path {
             "path",
             (shaders::PATH_RQ, shaders::PATH_BVH),
             true,
+            std::mem::size_of::<PassConstants>(),
         )?)))
     }
 }
@@ -95,16 +96,18 @@ impl Integrator for Full {
     }
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
-        let film = film_pipeline(
+        // One kernel for the film pass and the cache's update pass (glsl/indirect/full.comp).
+        let kernel = film_pipeline(
             ctx,
             scene,
             self.0.kernel_features(),
             "full",
             (shaders::FULL_RQ, shaders::FULL_BVH),
             true,
+            std::mem::size_of::<FullPass>(),
         )?;
         Ok(Box::new(FullKernels {
-            film,
+            kernel,
             cache: RefCell::new(None),
             off_reason: RefCell::new(String::new()),
         }))
@@ -112,8 +115,9 @@ impl Integrator for Full {
 }
 
 struct FullKernels {
-    film: ComputePipeline,
-    /// Created by the first render that uses a cache (its update kernel is compiled then).
+    /// Runs both passes: FullPass.mode chooses.
+    kernel: ComputePipeline,
+    /// Created by the first render that uses a cache.
     cache: RefCell<Option<RadiosityCache>>,
     /// Why the last render had no cache ("" when it had one).
     off_reason: RefCell<String>,
@@ -146,26 +150,7 @@ impl IntegratorPasses for FullKernels {
         let shape = CacheShape::new(frame.width, frame.height, scene.max_albedo);
         let mut cache = self.cache.borrow_mut();
         if cache.as_ref().is_none_or(|c| c.shape != shape) {
-            let update = match cache.take() {
-                Some(old) => old.into_pipeline(),
-                None => {
-                    let mut bindings = vec![(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER)];
-                    bindings.extend(scene.trace.bindings());
-                    let update = ComputePipeline::new(
-                        ctx,
-                        "radiosity_update",
-                        scene
-                            .trace
-                            .select(shaders::RADIOSITY_UPDATE_RQ, shaders::RADIOSITY_UPDATE_BVH),
-                        &bindings,
-                        std::mem::size_of::<RadiosityPass>() as u32,
-                        &[scene.gpu.features],
-                    )?;
-                    scene.trace.bind(&update);
-                    update
-                }
-            };
-            *cache = Some(RadiosityCache::new(ctx, update, shape)?);
+            *cache = Some(RadiosityCache::new(ctx, shape)?);
         }
         let c = cache.as_ref().expect("created above");
         c.configure(frame);
@@ -175,30 +160,28 @@ impl IntegratorPasses for FullKernels {
     }
 
     fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
-        bind_film(&self.film, frame, film, aovs);
-        if let Some(c) = self.cache.borrow().as_ref() {
-            c.pipeline()
-                .bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
-        }
+        bind_film(&self.kernel, frame, film, aovs);
     }
 
     fn begin(&self, ctx: &Context, seed: u64, first: u32, count: u32) -> Result<u32> {
         match self.cache.borrow().as_ref() {
-            Some(c) if self.off_reason.borrow().is_empty() => c.begin(ctx, seed, first, count),
+            // The update pass runs in the kernel bound to this render's buffers (bind comes
+            // first): it reads none of the film's, but the descriptors must be valid.
+            Some(c) if self.off_reason.borrow().is_empty() => {
+                c.begin(ctx, &self.kernel, seed, first, count)
+            }
             _ => Ok(count),
         }
     }
 
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
-        dispatch_tile(&self.film, cmd, pass);
-        if pass.sample_count == 0
-            && self.off_reason.borrow().is_empty()
-            && let Some(c) = self.cache.borrow().as_ref()
-        {
-            // The driver's warm-up pass (no samples): drivers that compile at the first dispatch
-            // compile the update kernel now, outside the timed passes.
-            c.record_empty(cmd);
-        }
+        let push = FullPass {
+            film: *pass,
+            mode: FULL_PASS_FILM,
+            ..Default::default()
+        };
+        self.kernel
+            .dispatch(cmd, bytemuck::bytes_of(&push), tile_groups(pass.tile));
     }
 
     fn report(&self) -> Vec<(String, String)> {

@@ -1,7 +1,7 @@
 //! The radiosity cache (TECHNIQUES.md §6.2–6.4): the outgoing diffuse radiance B = ρ/π·E of
 //! surfaces, cached in a world-space hashed grid for the indirect-diffuse rays of the full
-//! integrator (glsl/indirect/indirect.glsl reads it; glsl/indirect/radiosity_update.comp
-//! writes its samples).
+//! integrator (glsl/indirect/indirect.glsl reads it; the update pass of glsl/indirect/full.comp,
+//! the film pass's kernel, writes its samples).
 //!
 //! Why a hashed grid, and why its table is built on the host:
 //! - A hashed grid needs only a hit's position and normal, so both trace paths and every shape
@@ -39,6 +39,7 @@
 
 use crate::error::{Error, Result};
 use crate::layout::*;
+use crate::render::direct::tile_groups;
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
 use ash::vk;
 use std::cell::{self, RefCell};
@@ -71,6 +72,8 @@ pub struct CacheShape {
     pub slots: u32,
     pub paths: u32,
     pub block: u32,
+    /// Blocks across and down (paths = their product).
+    pub blocks: [u32; 2],
     pub warmup: u32,
 }
 
@@ -81,7 +84,8 @@ impl CacheShape {
         while width.div_ceil(block) * height.div_ceil(block) > MAX_PATHS {
             block += 1;
         }
-        let paths = width.div_ceil(block) * height.div_ceil(block);
+        let blocks = [width.div_ceil(block), height.div_ceil(block)];
+        let paths = blocks[0] * blocks[1];
         // Cells are at most half the slots; a generation's records name up to `keys` cells and
         // cells live MAX_AGE generations. Measured on scenes/interior.json at 320x240: 92k cells
         // for 29k keys per generation; 4x the keys as slots evicted live cells and cost 25% more
@@ -104,6 +108,7 @@ impl CacheShape {
             slots,
             paths,
             block,
+            blocks,
             warmup,
         }
     }
@@ -140,7 +145,6 @@ struct State {
 
 pub struct RadiosityCache {
     pub shape: CacheShape,
-    update: ComputePipeline,
     table: Buffer,
     rounds_max: u32,
     /// Whether renders publish generations at samples 1, 2, 4, … (else the warm-up's table
@@ -154,7 +158,7 @@ fn record_bytes() -> u64 {
 }
 
 impl RadiosityCache {
-    pub fn new(ctx: &Context, update: ComputePipeline, shape: CacheShape) -> Result<Self> {
+    pub fn new(ctx: &Context, shape: CacheShape) -> Result<Self> {
         let entry = std::mem::size_of::<RadiosityEntry>() as u64;
         let table_bytes = u64::from(shape.slots) * entry;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -180,7 +184,6 @@ impl RadiosityCache {
         )?;
         Ok(RadiosityCache {
             shape,
-            update,
             table,
             rounds_max,
             refresh: cell::Cell::new(true),
@@ -199,25 +202,6 @@ impl RadiosityCache {
                 update_seconds: 0.0,
             }),
         })
-    }
-
-    pub fn pipeline(&self) -> &ComputePipeline {
-        &self.update
-    }
-
-    /// The update kernel, for a cache of another shape.
-    pub fn into_pipeline(self) -> ComputePipeline {
-        self.update
-    }
-
-    /// An update dispatch with no paths (see FullKernels::record).
-    pub fn record_empty(&self, cmd: vk::CommandBuffer) {
-        let pc = RadiosityPass {
-            records: self.state.borrow().records.address,
-            ..Default::default()
-        };
-        self.update
-            .dispatch(cmd, bytemuck::bytes_of(&pc), [1, 1, 1]);
     }
 
     /// Points the frame constants at the table.
@@ -239,12 +223,19 @@ impl RadiosityCache {
     }
 
     /// Brings the table to the one samples from `first` on see, and returns how many samples
-    /// (at most `count`) see the same table.
-    pub fn begin(&self, ctx: &Context, seed: u64, first: u32, count: u32) -> Result<u32> {
+    /// (at most `count`) see the same table. `kernel` is full.comp's, bound to a render.
+    pub fn begin(
+        &self,
+        ctx: &Context,
+        kernel: &ComputePipeline,
+        seed: u64,
+        first: u32,
+        count: u32,
+    ) -> Result<u32> {
         let t0 = Instant::now();
         let mut st = self.state.borrow_mut();
         if st.seed != Some(seed) || st.next_index > first {
-            self.warm_up(ctx, &mut st, seed)?;
+            self.warm_up(ctx, kernel, &mut st, seed)?;
         }
         if !self.refresh.get() {
             // The warm-up's table serves every sample.
@@ -258,7 +249,7 @@ impl RadiosityCache {
                 st.table_from = i;
             }
             let rounds = (next_boundary(i).min(first) - i).min(self.rounds_max);
-            self.update(ctx, &mut st, seed, i, rounds)?;
+            self.update(ctx, kernel, &mut st, seed, i, rounds)?;
             st.next_index += rounds;
         }
         if is_boundary(first) && st.table_from < first {
@@ -269,7 +260,13 @@ impl RadiosityCache {
         Ok(count.min(next_boundary(first) - first))
     }
 
-    fn warm_up(&self, ctx: &Context, st: &mut State, seed: u64) -> Result<()> {
+    fn warm_up(
+        &self,
+        ctx: &Context,
+        kernel: &ComputePipeline,
+        st: &mut State,
+        seed: u64,
+    ) -> Result<()> {
         st.seed = Some(seed);
         st.next_index = 0;
         st.table_from = 0;
@@ -285,7 +282,7 @@ impl RadiosityCache {
             .div_ceil(self.shape.paths)
             .clamp(1, self.rounds_max);
         for round in 0..self.shape.warmup {
-            self.update(ctx, st, seed, WARMUP_INDEX + round * rounds, rounds)?;
+            self.update(ctx, kernel, st, seed, WARMUP_INDEX + round * rounds, rounds)?;
             self.publish(ctx, st)?;
         }
         Ok(())
@@ -296,29 +293,33 @@ impl RadiosityCache {
     fn update(
         &self,
         ctx: &Context,
+        kernel: &ComputePipeline,
         st: &mut State,
         seed: u64,
         index: u32,
         rounds: u32,
     ) -> Result<()> {
         let s = self.shape;
-        let pc = RadiosityPass {
-            records: st.records.address,
-            index,
-            rounds,
-            seed_lo: seed as u32,
-            seed_hi: (seed >> 32) as u32,
-            paths: s.paths,
-            vertices: VERTICES,
-            block: s.block,
+        let pc = FullPass {
+            film: PassConstants {
+                seed_lo: seed as u32,
+                seed_hi: (seed >> 32) as u32,
+                ..Default::default()
+            },
+            mode: FULL_PASS_UPDATE,
             pad0: 0,
+            update: RadiosityPass {
+                records: st.records.address,
+                index,
+                vertices: VERTICES,
+                block: s.block,
+                pad0: 0,
+            },
         };
+        // One invocation per block (x, y) and update index (z), in film-kernel workgroups.
+        let [gx, gy, _] = tile_groups([0, 0, s.blocks[0], s.blocks[1]]);
         ctx.one_shot(|cmd| {
-            self.update.dispatch(
-                cmd,
-                bytemuck::bytes_of(&pc),
-                [s.paths.div_ceil(64), rounds, 1],
-            );
+            kernel.dispatch(cmd, bytemuck::bytes_of(&pc), [gx, gy, rounds]);
             // SAFETY: recording into the command buffer one_shot owns.
             unsafe {
                 ctx.device.cmd_pipeline_barrier(
