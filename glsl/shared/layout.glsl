@@ -33,7 +33,8 @@
 // so code for absent features is folded away at pipeline creation.
 #define FEATURE_MESHES 1
 #define FEATURE_SHAPES 2
-#define FEATURE_AREA_LIGHTS 4
+// Rect lights, analytic or emissive rects (disk and sphere lights have bits of their own below).
+#define FEATURE_RECT_LIGHTS 4
 #define FEATURE_DOME 8
 #define FEATURE_SUN 16
 #define FEATURE_TEXTURES 32
@@ -48,6 +49,9 @@
 // Settings: control variates for the diffuse light samples of rect, disk and sphere lights
 // (Frame.control_variates; TECHNIQUES.md 5).
 #define FEATURE_CONTROL_VARIATES 1024
+// Disk and sphere lights, analytic or emissive shapes (like FEATURE_RECT_LIGHTS).
+#define FEATURE_DISK_LIGHTS 2048
+#define FEATURE_SPHERE_LIGHTS 4096
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8

@@ -62,6 +62,7 @@
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 #include "layout.glsl"
+#include "features.glsl"
 #include "common.glsl"
 #include "dome_map.glsl"
 
@@ -616,25 +617,26 @@ LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 w) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Any light. `dome` is only read for LIGHT_DOME.
+// Any light. `dome` is only read for LIGHT_DOME. Each kind behind its feature bit: a scene's
+// kernel holds the samplers of the kinds it has (10% less LLVM time for a rect and a dome).
 
 LightSample sample_light(GpuLight l, GpuDomeSampling dome, vec3 p, vec2 u) {
-    if (l.kind == LIGHT_RECT) return sample_rect(l, p, u);
-    if (l.kind == LIGHT_SPHERE) return sample_sphere(l, p, u);
-    if (l.kind == LIGHT_DISK) return sample_disk(l, p, u);
-    if (l.kind == LIGHT_SUN) return sample_sun(l, u);
-    if (l.kind == LIGHT_TRIANGLE) return sample_triangle(l, p, u);
-    if (l.kind == LIGHT_DOME) return sample_dome(l, dome, u);
+    if (has_feature(FEATURE_RECT_LIGHTS) && l.kind == LIGHT_RECT) return sample_rect(l, p, u);
+    if (has_feature(FEATURE_SPHERE_LIGHTS) && l.kind == LIGHT_SPHERE) return sample_sphere(l, p, u);
+    if (has_feature(FEATURE_DISK_LIGHTS) && l.kind == LIGHT_DISK) return sample_disk(l, p, u);
+    if (has_feature(FEATURE_SUN) && l.kind == LIGHT_SUN) return sample_sun(l, u);
+    if (has_feature(FEATURE_TRIANGLE_LIGHTS) && l.kind == LIGHT_TRIANGLE) return sample_triangle(l, p, u);
+    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME) return sample_dome(l, dome, u);
     return no_light_sample();
 }
 
 LightHit light_hit(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 w) {
-    if (l.kind == LIGHT_RECT) return rect_hit(l, p, w);
-    if (l.kind == LIGHT_SPHERE) return sphere_hit(l, p, w);
-    if (l.kind == LIGHT_DISK) return disk_hit(l, p, w);
-    if (l.kind == LIGHT_SUN) return sun_hit(l, w);
-    if (l.kind == LIGHT_TRIANGLE) return triangle_hit(l, p, w);
-    if (l.kind == LIGHT_DOME) return dome_hit(l, dome, w);
+    if (has_feature(FEATURE_RECT_LIGHTS) && l.kind == LIGHT_RECT) return rect_hit(l, p, w);
+    if (has_feature(FEATURE_SPHERE_LIGHTS) && l.kind == LIGHT_SPHERE) return sphere_hit(l, p, w);
+    if (has_feature(FEATURE_DISK_LIGHTS) && l.kind == LIGHT_DISK) return disk_hit(l, p, w);
+    if (has_feature(FEATURE_SUN) && l.kind == LIGHT_SUN) return sun_hit(l, w);
+    if (has_feature(FEATURE_TRIANGLE_LIGHTS) && l.kind == LIGHT_TRIANGLE) return triangle_hit(l, p, w);
+    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME) return dome_hit(l, dome, w);
     return light_miss();
 }
 

@@ -12,8 +12,7 @@
 #include "common.glsl"
 #include "dome_map.glsl"
 
-layout(constant_id = SPEC_FEATURES) const uint FEATURES = 0xffffffffu;
-bool has_feature(uint f) { return (FEATURES & f) != 0u; }
+#include "features.glsl"
 
 layout(scalar, binding = BINDING_FRAME) uniform FrameBlock { Frame frame; };
 

@@ -149,6 +149,16 @@ struct Encoded {
     area: f32,
 }
 
+/// The feature bit of an area light's kind (analytic light or emissive shape): a kernel holds the
+/// sampling code of the kinds its scene has.
+fn light_kind_feature(kind: u32) -> u32 {
+    match kind {
+        LIGHT_SPHERE => FEATURE_SPHERE_LIGHTS,
+        LIGHT_DISK => FEATURE_DISK_LIGHTS,
+        _ => FEATURE_RECT_LIGHTS,
+    }
+}
+
 fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
     use std::f64::consts::PI;
     match *g {
@@ -347,7 +357,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
             if let Some(geom) = &surface {
                 let e = encode(geom, origin);
                 (g.kind, g.p0, g.p1, g.p2, g.area) = (e.light_kind, e.p0, e.p1, e.p2, e.area);
-                features |= FEATURE_AREA_LIGHTS;
+                features |= light_kind_feature(e.light_kind);
             }
             match &l.kind {
                 LightKind::Rect { .. } | LightKind::Disk { .. } | LightKind::Sphere { .. } => {}
@@ -412,7 +422,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
             (g.kind, g.p0, g.p1, g.p2, g.area) = (e.light_kind, e.p0, e.p1, e.p2, e.area);
             shapes[si].light = lights.len() as u32;
             lights.push(g);
-            features |= FEATURE_AREA_LIGHTS;
+            features |= light_kind_feature(e.light_kind);
         }
         for (ii, inst) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[inst.mesh as usize];
