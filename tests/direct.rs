@@ -28,31 +28,6 @@ fn scene_with(light: &str, extra: &str) -> String {
     )
 }
 
-/// Floor points seen through each pixel, averaged over a 4x4 grid of sub-pixel positions.
-fn floor_points() -> Vec<Vec<DVec3>> {
-    let pos = DVec3::new(6.0, 1.0, 0.3);
-    let f = (DVec3::ZERO - pos).normalize();
-    let r = f.cross(DVec3::Y).normalize();
-    let u = r.cross(f);
-    let t = (6.0f64.to_radians() / 2.0).tan();
-    let mut out = Vec::new();
-    for y in 0..H {
-        for x in 0..W {
-            let mut pts = Vec::new();
-            for j in 0..4 {
-                for i in 0..4 {
-                    let nx = 2.0 * (f64::from(x) + (f64::from(i) + 0.5) / 4.0) / f64::from(W) - 1.0;
-                    let ny = 2.0 * (f64::from(y) + (f64::from(j) + 0.5) / 4.0) / f64::from(H) - 1.0;
-                    let d = (f + nx * r * t - ny * u * t).normalize();
-                    pts.push(pos + d * (-pos.y / d.y));
-                }
-            }
-            out.push(pts);
-        }
-    }
-    out
-}
-
 /// `spp` samples per pixel of `json` by `technique`, in BATCHES independent renders.
 fn render_technique(json: &str, spp: u32, technique: Technique, seed: u64) -> Batches {
     let ctx = context();
@@ -78,7 +53,7 @@ fn render_technique(json: &str, spp: u32, technique: Technique, seed: u64) -> Ba
 
 /// Outgoing radiance of the Lambert floor for irradiance E(x): albedo E / pi.
 fn check_against(json: &str, irradiance: impl Fn(DVec3) -> f64) {
-    let pts = floor_points();
+    let pts = floor_points(DVec3::new(6.0, 1.0, 0.3), 6.0, W, H);
     let out = render_technique(json, 128, Technique::Mis, 1);
     assert_matches_expectation(
         &out,

@@ -32,31 +32,6 @@ fn scene_json(light: &str, textures: &str) -> String {
     )
 }
 
-/// Floor points seen through each pixel, on a 4 x 4 grid of sub-pixel positions.
-fn floor_points() -> Vec<Vec<DVec3>> {
-    let pos = DVec3::from_array(CAMERA);
-    let f = (-pos).normalize();
-    let r = f.cross(DVec3::Y).normalize();
-    let u = r.cross(f);
-    let t = (FOV_DEG.to_radians() / 2.0).tan();
-    let mut out = Vec::new();
-    for y in 0..H {
-        for x in 0..W {
-            let mut pts = Vec::new();
-            for j in 0..4 {
-                for i in 0..4 {
-                    let nx = 2.0 * (f64::from(x) + (f64::from(i) + 0.5) / 4.0) / f64::from(W) - 1.0;
-                    let ny = 2.0 * (f64::from(y) + (f64::from(j) + 0.5) / 4.0) / f64::from(H) - 1.0;
-                    let d = (f + nx * r * t - ny * u * t).normalize();
-                    pts.push(pos + d * (-pos.y / d.y));
-                }
-            }
-            out.push(pts);
-        }
-    }
-    out
-}
-
 fn render(
     scene: &illum::scene::Scene,
     integrator: IntegratorSettings,
@@ -78,7 +53,7 @@ fn render(
 
 /// The floor's radiance ALBEDO E / pi for irradiance E(x), averaged over each pixel's points.
 fn check(b: &Batches, irradiance: impl Fn(DVec3) -> f64) {
-    let pts = floor_points();
+    let pts = floor_points(DVec3::from_array(CAMERA), FOV_DEG, W, H);
     assert_matches_expectation(
         b,
         |i| {

@@ -310,3 +310,28 @@ pub fn block_stats(outs: &[RenderOutput], block: u32) -> Vec<(f64, f64)> {
         })
         .collect()
 }
+
+/// The floor points (y = 0) seen through each pixel of a w × h camera at `pos` looking at the
+/// origin (vertical field of view `fov_deg`, up +Y), on a 4 × 4 grid of sub-pixel positions.
+pub fn floor_points(pos: glam::DVec3, fov_deg: f64, w: u32, h: u32) -> Vec<Vec<glam::DVec3>> {
+    let f = (-pos).normalize();
+    let r = f.cross(glam::DVec3::Y).normalize();
+    let u = r.cross(f);
+    let t = (fov_deg.to_radians() / 2.0).tan();
+    let mut out = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let mut pts = Vec::new();
+            for j in 0..4 {
+                for i in 0..4 {
+                    let nx = 2.0 * (f64::from(x) + (f64::from(i) + 0.5) / 4.0) / f64::from(w) - 1.0;
+                    let ny = 2.0 * (f64::from(y) + (f64::from(j) + 0.5) / 4.0) / f64::from(h) - 1.0;
+                    let d = (f + nx * r * t - ny * u * t).normalize();
+                    pts.push(pos + d * (-pos.y / d.y));
+                }
+            }
+            out.push(pts);
+        }
+    }
+    out
+}
