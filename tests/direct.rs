@@ -9,7 +9,7 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use illum::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::render::{IntegratorSettings, Technique};
 use illum::stress::closed_form::polygon_irradiance;
 use std::f64::consts::PI;
 
@@ -30,39 +30,18 @@ fn scene_with(light: &str, extra: &str) -> String {
 
 /// `spp` samples per pixel of `json` by `technique`, in BATCHES independent renders.
 fn render_technique(json: &str, spp: u32, technique: Technique, seed: u64) -> Batches {
-    let ctx = context();
-    let settings = RenderSettings {
-        spp,
-        seed,
-        trace: trace_mode(),
-        integrator: IntegratorSettings {
-            technique,
-            ..Default::default()
-        },
+    let integrator = IntegratorSettings {
+        technique,
         ..Default::default()
     };
-    let out = Batches::render(
-        &Renderer::new(ctx.clone()),
-        &scene(json),
-        &settings,
-        BATCHES,
-    );
-    assert_no_validation_messages(&ctx);
-    out
+    render_batches_with(&scene(json), integrator, spp, seed)
 }
 
 /// Outgoing radiance of the Lambert floor for irradiance E(x): albedo E / pi.
 fn check_against(json: &str, irradiance: impl Fn(DVec3) -> f64) {
     let pts = floor_points(DVec3::new(6.0, 1.0, 0.3), 6.0, W, H);
     let out = render_technique(json, 128, Technique::Mis, 1);
-    assert_matches_expectation(
-        &out,
-        |i| {
-            let e = pts[i].iter().map(|&p| irradiance(p)).sum::<f64>() / pts[i].len() as f64;
-            [ALBEDO * e / PI; 3]
-        },
-        0.01,
-    );
+    assert_lambert_floor(&out, &pts, ALBEDO, irradiance);
 }
 
 #[test]

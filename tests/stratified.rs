@@ -1,15 +1,16 @@
 //! Stratified samples (glsl/shared/direct.glsl `stratify`): the light samples of a light and the
 //! BRDF samples of a lobe at a shading point are jittered within the cells of a grid (n strata
-//! along the rows of a textured dome). Each estimator alone must stay unbiased, so each is
-//! checked against a closed form with several samples per group: light samples only and BRDF
-//! samples only on a Lambert floor under a large rect light (the polygon formula), and light
-//! samples only under a textured dome (Gauss-Legendre quadrature of its map). Per-pixel and
-//! image-mean t-tests over BATCHES independent renders (tests/common), family-wise 0.01.
+//! of a textured dome's rows, its columns in a randomly shifted Latin order). Each estimator
+//! alone must stay unbiased, so each is checked against a closed form with several samples per
+//! group: light samples only and BRDF samples only on a Lambert floor under a large rect light
+//! (the polygon formula), and light samples only under a textured dome (Gauss-Legendre
+//! quadrature of its map). Per-pixel and image-mean t-tests over BATCHES independent renders
+//! (tests/common), family-wise 0.01.
 
 mod common;
 use common::*;
 use glam::DVec3;
-use illum::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::render::{IntegratorSettings, Technique};
 use illum::stress::closed_form::{dome_irradiance_quadrature, polygon_irradiance};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -32,36 +33,10 @@ fn scene_json(light: &str, textures: &str) -> String {
     )
 }
 
-fn render(
-    scene: &illum::scene::Scene,
-    integrator: IntegratorSettings,
-    spp: u32,
-    seed: u64,
-) -> Batches {
-    let ctx = context();
-    let settings = RenderSettings {
-        spp,
-        seed,
-        trace: trace_mode(),
-        integrator,
-        ..Default::default()
-    };
-    let out = Batches::render(&Renderer::new(ctx.clone()), scene, &settings, BATCHES);
-    assert_no_validation_messages(&ctx);
-    out
-}
-
 /// The floor's radiance ALBEDO E / pi for irradiance E(x), averaged over each pixel's points.
 fn check(b: &Batches, irradiance: impl Fn(DVec3) -> f64) {
     let pts = floor_points(DVec3::from_array(CAMERA), FOV_DEG, W, H);
-    assert_matches_expectation(
-        b,
-        |i| {
-            let e = pts[i].iter().map(|&p| irradiance(p)).sum::<f64>() / pts[i].len() as f64;
-            [ALBEDO * e / PI; 3]
-        },
-        0.01,
-    );
+    assert_lambert_floor(b, &pts, ALBEDO, irradiance);
 }
 
 #[test]
@@ -99,7 +74,7 @@ fn stratified_light_and_brdf_samples_match_the_polygon_formula() {
             brdf_samples,
             ..Default::default()
         };
-        check(&render(&scene, integrator, 64, 3), irradiance);
+        check(&render_batches_with(&scene, integrator, 64, 3), irradiance);
     }
 }
 
@@ -132,6 +107,6 @@ fn stratified_dome_samples_match_the_quadrature_of_the_map() {
         light_samples: 4,
         ..Default::default()
     };
-    let b = render(&scene, integrator, 256, 6);
+    let b = render_batches_with(&scene, integrator, 256, 6);
     assert_matches_expectation(&b, |_| (ALBEDO * e / PI).to_array(), 0.01);
 }

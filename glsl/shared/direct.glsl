@@ -289,13 +289,19 @@ vec3 control_variate(Shading sh, GpuLight l, GpuDomeSampling dome, float n, vec3
 // sphere warp both dimensions alike.
 vec2 stratify(vec2 u, uint i, uint n, uint shift, bool rows) {
     if (n <= 1u) return u;
-    if (rows) return min((vec2(i, (i + shift) % n) + u) / float(n), vec2(0.99999994));
-    uint ny = rows ? 1u : uint(sqrt(float(n) + 0.5));
-    while (n % ny != 0u) ny -= 1u;
-    uint nx = n / ny;
+    uvec2 cell = uvec2(i, (i + shift) % n), cells = uvec2(n);
+    if (!rows) {
+        uint ny = uint(sqrt(float(n) + 0.5));
+        while (n % ny != 0u) ny -= 1u;
+        cells = uvec2(n / ny, ny);
+        cell = uvec2(i % cells.x, i / cells.x);
+    }
     // (k + u) / n can round up to 1 in float: the samplers expect u < 1.
-    return min((vec2(i % nx, i / nx) + u) / vec2(nx, ny), vec2(0.99999994));
+    return min((vec2(cell) + u) / vec2(cells), vec2(0.99999994));
 }
+
+// Whether light l's samples take stratify()'s rows: a dome with sampling tables (a textured one).
+bool stratify_rows(GpuLight l, GpuDomeSampling dome) { return l.kind == LIGHT_DOME && dome.width > 0u; }
 
 // Light sample i of the `count` of light l (looped or picked, n_l its expected count): its
 // candidate, or with a control variate (cv) its ray and g_j (in cv_tr and the ray's s).
@@ -304,7 +310,7 @@ void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling 
     uint technique = frame.technique;
     bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
     vec2 u = rng_next2(rng);
-    LightSample ls = sample_light(l, dome, sh.p, cv ? u : stratify(u, i, count, shift, l.kind == LIGHT_DOME && dome.width > 0u));
+    LightSample ls = sample_light(l, dome, sh.p, cv ? u : stratify(u, i, count, shift, stratify_rows(l, dome)));
     if (!(ls.pdf > 0.0)) return;
     vec3 le = light_radiance(l, ls.uv, ls.delta);
     vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, frame.brdf_samples);
@@ -459,7 +465,7 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                     close = !picked;
                     cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
                     // The textured dome's column order (stratify), drawn once per group.
-                    if (!cv && count > 1u && l.kind == LIGHT_DOME && dome.width > 0u) shift = min(uint(rng_next(rng) * float(count)), count - 1u);
+                    if (!cv && count > 1u && stratify_rows(l, dome)) shift = min(uint(rng_next(rng) * float(count)), count - 1u);
                 }
             } else if (g == rounds) {
                 close = technique != TECHNIQUE_BRDF;

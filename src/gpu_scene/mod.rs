@@ -143,20 +143,12 @@ fn shape_aabb(s: &GpuShape) -> [f32; 6] {
 struct Encoded {
     shape_kind: u32,
     light_kind: u32,
+    /// The kernels' feature bit of that light kind: a kernel holds the samplers of its kinds.
+    light_feature: u32,
     p0: [f32; 4],
     p1: [f32; 3],
     p2: [f32; 4],
     area: f32,
-}
-
-/// The feature bit of an area light's kind (analytic light or emissive shape): a kernel holds the
-/// sampling code of the kinds its scene has.
-fn light_kind_feature(kind: u32) -> u32 {
-    match kind {
-        LIGHT_SPHERE => FEATURE_SPHERE_LIGHTS,
-        LIGHT_DISK => FEATURE_DISK_LIGHTS,
-        _ => FEATURE_RECT_LIGHTS,
-    }
 }
 
 fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
@@ -165,6 +157,7 @@ fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
         ShapeGeometry::Sphere { center, radius } => Encoded {
             shape_kind: SHAPE_SPHERE,
             light_kind: LIGHT_SPHERE,
+            light_feature: FEATURE_SPHERE_LIGHTS,
             p0: v4(center - origin, radius),
             p1: [0.0; 3],
             p2: [0.0; 4],
@@ -173,6 +166,7 @@ fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
         ShapeGeometry::Rect { center, u, v } => Encoded {
             shape_kind: SHAPE_RECT,
             light_kind: LIGHT_RECT,
+            light_feature: FEATURE_RECT_LIGHTS,
             p0: v4(center - origin, 0.0),
             p1: d3(u),
             p2: v4(v, 0.0),
@@ -187,6 +181,7 @@ fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
             Encoded {
                 shape_kind: SHAPE_DISK,
                 light_kind: LIGHT_DISK,
+                light_feature: FEATURE_DISK_LIGHTS,
                 p0: v4(center - origin, radius),
                 p1: d3(n),
                 p2: v4(perpendicular(n), 0.0),
@@ -357,7 +352,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
             if let Some(geom) = &surface {
                 let e = encode(geom, origin);
                 (g.kind, g.p0, g.p1, g.p2, g.area) = (e.light_kind, e.p0, e.p1, e.p2, e.area);
-                features |= light_kind_feature(e.light_kind);
+                features |= e.light_feature;
             }
             match &l.kind {
                 LightKind::Rect { .. } | LightKind::Disk { .. } | LightKind::Sphere { .. } => {}
@@ -422,7 +417,7 @@ fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
             (g.kind, g.p0, g.p1, g.p2, g.area) = (e.light_kind, e.p0, e.p1, e.p2, e.area);
             shapes[si].light = lights.len() as u32;
             lights.push(g);
-            features |= light_kind_feature(e.light_kind);
+            features |= e.light_feature;
         }
         for (ii, inst) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[inst.mesh as usize];

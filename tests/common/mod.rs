@@ -3,7 +3,7 @@
 //! `ILLUM_TEST_DEVICE` the device.
 #![allow(dead_code)]
 
-use illum::render::{RenderOutput, RenderSettings, Renderer};
+use illum::render::{IntegratorSettings, RenderOutput, RenderSettings, Renderer};
 use illum::scene::Scene;
 use illum::trace::TraceMode;
 use illum::vk::{Context, ContextOptions};
@@ -173,19 +173,25 @@ impl Batches {
 /// Renders `spp` samples per pixel of `json` in BATCHES independent renders on a fresh validated
 /// context, and checks that validation stayed silent.
 pub fn render_batches(json: &str, spp: u32, seed: u64) -> Batches {
+    render_batches_with(&scene(json), IntegratorSettings::default(), spp, seed)
+}
+
+/// The same for a loaded scene and integrator settings.
+pub fn render_batches_with(
+    scene: &Scene,
+    integrator: IntegratorSettings,
+    spp: u32,
+    seed: u64,
+) -> Batches {
     let ctx = context();
     let settings = RenderSettings {
         spp,
         seed,
         trace: trace_mode(),
+        integrator,
         ..Default::default()
     };
-    let b = Batches::render(
-        &Renderer::new(ctx.clone()),
-        &scene(json),
-        &settings,
-        BATCHES,
-    );
+    let b = Batches::render(&Renderer::new(ctx.clone()), scene, &settings, BATCHES);
     assert_no_validation_messages(&ctx);
     b
 }
@@ -334,4 +340,23 @@ pub fn floor_points(pos: glam::DVec3, fov_deg: f64, w: u32, h: u32) -> Vec<Vec<g
         }
     }
     out
+}
+
+/// Checks renders of a Lambert floor of `albedo` against its radiance albedo E / pi, with the
+/// irradiance E(x) averaged over each pixel's floor points `pts` (floor_points), at family-wise
+/// significance 0.01 (assert_matches_expectation).
+pub fn assert_lambert_floor(
+    b: &Batches,
+    pts: &[Vec<glam::DVec3>],
+    albedo: f64,
+    irradiance: impl Fn(glam::DVec3) -> f64,
+) {
+    assert_matches_expectation(
+        b,
+        |i| {
+            let e = pts[i].iter().map(|&p| irradiance(p)).sum::<f64>() / pts[i].len() as f64;
+            [albedo * e / std::f64::consts::PI; 3]
+        },
+        0.01,
+    );
 }
