@@ -218,9 +218,13 @@ fn trace(a: &BenchTraceArgs) -> Result<()> {
         "hit%",
         "bnc%"
     );
-    let rate = |r: bench::Rate| match r.cpu {
-        Some(c) => format!("{:.3} ({:.3})", r.wall, c),
-        None => format!("{:.3}", r.wall),
+    // A CPU device's threads are this process's: rays per CPU-second. A GPU's: rays per second
+    // of the dispatches' own device time, without the submissions' round trips.
+    let cpu_device = ctx.info().kind == "CPU";
+    let rate = |r: bench::Rate| match (cpu_device, r.cpu, r.device) {
+        (true, Some(c), _) => format!("{:.3} ({:.3})", r.wall, c),
+        (false, _, Some(d)) => format!("{:.3} [{:.3}]", r.wall, d),
+        _ => format!("{:.3}", r.wall),
     };
     bench::run(
         &ctx,
@@ -247,8 +251,12 @@ fn trace(a: &BenchTraceArgs) -> Result<()> {
         },
     )?;
     println!(
-        "Mrays per second of wall time (and per CPU-second of this process, which other load on \
-         the machine disturbs less); bounce rays: cosine-distributed from the first hits"
+        "Mrays per second of wall time {}; bounce rays: cosine-distributed from the first hits",
+        if cpu_device {
+            "(and per CPU-second of this process, which other load on the machine disturbs less)"
+        } else {
+            "[and per second of the dispatches' device time (timestamps), without submissions]"
+        }
     );
     super::check_validation(&ctx)
 }

@@ -181,11 +181,13 @@ pub fn process_cpu_seconds() -> Option<f64> {
     Some(ns as f64 * 1e-9)
 }
 
-/// A measurement: million rays per second of wall time and per CPU-second.
+/// A measurement: million rays per second of wall time, per CPU-second, and per second of the
+/// dispatches' device time (timestamps; where the queue has them).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Rate {
     pub wall: f64,
     pub cpu: Option<f64>,
+    pub device: Option<f64>,
 }
 
 /// One structure's figures on one mesh.
@@ -240,11 +242,12 @@ pub fn run(ctx: &Context, opts: &BenchOptions, report: &mut dyn FnMut(&BenchRow)
                 let mut hits = Vec::new();
                 for _ in 0..opts.repeat.max(1) {
                     let cpu0 = process_cpu_seconds();
-                    let (h, seconds) = kernel.trace(ctx, rays, mode)?;
+                    let (h, seconds, device) = kernel.trace(ctx, rays, mode)?;
                     let cpu = process_cpu_seconds().zip(cpu0).map(|(b, a)| b - a);
                     let mrays = |s: f64| rays.len() as f64 / s.max(1e-9) / 1e6;
                     best.wall = best.wall.max(mrays(seconds));
                     best.cpu = cpu.map(|c| mrays(c).max(best.cpu.unwrap_or(0.0)));
+                    best.device = device.map(|d| mrays(d).max(best.device.unwrap_or(0.0)));
                     hits = h;
                 }
                 Ok((hits, best))

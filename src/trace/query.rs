@@ -6,7 +6,7 @@ use crate::gpu_scene::GpuScene;
 use crate::layout::*;
 use crate::shaders;
 use crate::trace::TraceStructure;
-use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
+use crate::vk::{Buffer, ComputePipeline, Context, GpuTimer, MemoryLocation};
 use ash::vk;
 use std::time::Instant;
 
@@ -61,12 +61,21 @@ impl QueryKernel {
     }
 
     /// Traces `rays` with `mode` (QUERY_CLOSEST and/or QUERY_OCCLUDED; fields of the other stay
-    /// at their miss values). Returns one record per ray and the seconds the dispatches took
-    /// (uploads and readback excluded).
-    pub fn trace(&self, ctx: &Context, rays: &[Ray], mode: u32) -> Result<(Vec<HitRecord>, f64)> {
+    /// at their miss values). Returns one record per ray, the wall seconds the submissions took
+    /// (uploads and readback excluded) and, where the queue has timestamps, the device seconds
+    /// of the dispatches alone (without submission and fence waits, which dominate small
+    /// batches on a GPU).
+    pub fn trace(
+        &self,
+        ctx: &Context,
+        rays: &[Ray],
+        mode: u32,
+    ) -> Result<(Vec<HitRecord>, f64, Option<f64>)> {
         if rays.is_empty() {
-            return Ok((Vec::new(), 0.0));
+            return Ok((Vec::new(), 0.0, None));
         }
+        let timer = GpuTimer::new(ctx)?;
+        let mut device = timer.as_ref().map(|_| 0.0);
         let ray_buffer = ctx.upload("query rays", rays, vk::BufferUsageFlags::STORAGE_BUFFER)?;
         let hit_buffer = ctx.create_buffer(
             "query hits",
@@ -86,12 +95,21 @@ impl QueryKernel {
             };
             let t = Instant::now();
             ctx.one_shot(|cmd| {
+                if let Some(t) = &timer {
+                    t.start(cmd);
+                }
                 self.pipeline
-                    .dispatch(cmd, bytemuck::bytes_of(&pc), [count.div_ceil(GROUP), 1, 1])
+                    .dispatch(cmd, bytemuck::bytes_of(&pc), [count.div_ceil(GROUP), 1, 1]);
+                if let Some(t) = &timer {
+                    t.stop(cmd);
+                }
             })?;
             seconds += t.elapsed().as_secs_f64();
+            if let (Some(t), Some(d)) = (&timer, device.as_mut()) {
+                *d += t.seconds()?;
+            }
         }
-        Ok((ctx.download(&hit_buffer, rays.len())?, seconds))
+        Ok((ctx.download(&hit_buffer, rays.len())?, seconds, device))
     }
 }
 
