@@ -145,7 +145,16 @@ pub(crate) fn create_instance(entry: &ash::Entry, validation: bool) -> Result<as
             .application_info(&app_info)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&exts);
-        entry.create_instance(&info, None).vk("vkCreateInstance")
+        match entry.create_instance(&info, None) {
+            // The loader found no driver manifest (ICD) it could load.
+            Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => Err(Error::NoDevice(format!(
+                "the Vulkan loader found no driver (vkCreateInstance: ERROR_INCOMPATIBLE_DRIVER); \
+                 install one (mesa-vulkan-drivers for lavapipe, or the GPU vendor's) or point \
+                 VK_DRIVER_FILES at its manifest (VK_DRIVER_FILES={})",
+                std::env::var("VK_DRIVER_FILES").unwrap_or_else(|_| "unset".into())
+            ))),
+            r => r.vk("vkCreateInstance"),
+        }
     }
 }
 
