@@ -242,7 +242,11 @@ BrdfSample brdf_sample(GpuLobe lobe, vec3 n, vec3 t, vec3 b, vec3 v, vec2 u) {
     if (vh <= 0.0) return s;
     vec3 ll = 2.0 * vh * h - vl;
     if (ll.z <= 0.0) return s;
-    s.wi = normalize(ll.x * t + ll.y * b + ll.z * n);
+    vec3 wi = normalize(ll.x * t + ll.y * b + ll.z * n);
+    // brdf_eval() tests the world direction, not ll: a grazing ll.z > 0 can round to <= 0 there
+    // (seen on NVIDIA), and a sample whose pdf() is 0 breaks MIS. The same test on the same bits.
+    if (to_local(wi, n, t, b).z <= 0.0) return s;
+    s.wi = wi;
     vec3 F = lobe_fresnel(lobe, vh);
     if (lobe.distribution == DIST_DBRDF) {
         s.pdf = pdf / (4.0 * vh);

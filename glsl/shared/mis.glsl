@@ -31,6 +31,13 @@ float mis_r_over_one_plus_sq(float r) {
     return q / (1.0 + q * q);
 }
 
+// x / y within Vulkan's precision guarantee, which covers divisors in [2^-126, 2^126] only: beyond,
+// a driver may compute x * (1 / y) with 1 / y flushed to 0 (NVIDIA does), so a huge y is scaled
+// down first (by a power of two: exact).
+float mis_div(float x, float y) {
+    return y > 8.507059e37 ? (0.25 * x) / (0.25 * y) : x / y;
+}
+
 // r = n_b p_b / (n_a p_a) as (n_b / n_a) (p_b / p_a), so that (n p) is never formed: sample counts
 // are moderate, and when p_b / p_a leaves the float range, 0 or +inf is the right limit for every
 // weight below. 0 when n_b p_b == 0; +inf when n_a p_a == 0 < n_b p_b; n_b / n_a for two infinite
@@ -39,7 +46,7 @@ float mis_ratio(float n_a, float p_a, float n_b, float p_b) {
     if (!(n_b > 0.0) || !(p_b > 0.0)) return 0.0;
     if (!(n_a > 0.0) || !(p_a > 0.0)) return INF;
     // Two infinite pdfs (two deltas) compare by their counts.
-    return (n_b / n_a) * (p_a == INF && p_b == INF ? 1.0 : p_b / p_a);
+    return (n_b / n_a) * (p_a == INF && p_b == INF ? 1.0 : mis_div(p_b, p_a));
 }
 
 // Power-heuristic weight of technique a at a point x that both techniques may produce:
@@ -66,7 +73,7 @@ float mis_brdf_weight(float n_l, float p_l, float n_b, float p_b) { return mis_p
 // delta lobe) the BRDF term is F L_e / N_B.
 float mis_dbrdf_light_factor(float n_l, float p_l, float n_b, float p_b) {
     if (!(n_l > 0.0) || !(p_l > 0.0) || !(p_b > 0.0)) return 0.0;
-    if (!(n_b > 0.0)) return min((p_b / p_l) / n_l, 3.4e38);
+    if (!(n_b > 0.0)) return min(mis_div(p_b, p_l) / n_l, 3.4e38);
     return mis_r_over_one_plus_sq(mis_ratio(n_l, p_l, n_b, p_b)) / n_b;
 }
 
