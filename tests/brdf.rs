@@ -740,10 +740,11 @@ fn albedo_never_exceeds_one() {
                 let (m, e) = gpu_albedo_n(&k, white(dist, a), theta, seed, N / 4);
                 seed += 1;
                 line += &format!(" {theta}°: {m:.4}");
-                // One-sided z-test of albedo <= 1.
+                // One-sided z-test of albedo <= 1. A lobe that reflects all (white, alpha 0.01)
+                // has weights of exactly 1 up to float32 rounding: a few ulps of 1 at most.
                 let z = (m - 1.0) / e.max(f64::MIN_POSITIVE);
                 assert!(
-                    m <= 1.0 || normal_upper_p(z) > alpha(),
+                    m <= 1.0 + 4.0 * f64::from(f32::EPSILON) || normal_upper_p(z) > alpha(),
                     "model {dist} alpha {a:?} at {theta}°: albedo {m} ± {e} exceeds 1"
                 );
             }
