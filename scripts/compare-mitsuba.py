@@ -12,7 +12,9 @@ Equal time: illum's render time is what it prints as "render X s" (its kernel co
 excluded). Mitsuba renders a sample count calibrated from its previous render of that scene to
 take T seconds; its first (warm-up) render, which includes its JIT compilation, is timed apart and
 not counted. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
-unbiased estimator falls as 1/time). The table gives medians over rounds.
+unbiased estimator falls as 1/time). The table gives medians over rounds, and the variance part
+of relMSE from pairs of rounds (pair_relmse: free of the reference's own noise, which matters where
+the renders come near the reference, as on a GPU).
 
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 \\
       /work/mi-venv/bin/python scripts/compare-mitsuba.py scenes/bench/mitsuba-rect.json \\
@@ -49,6 +51,21 @@ def relmse(img, ref):
     return float(np.mean(d * d / (ref[ok] ** 2 + 0.01)))
 
 
+def pair_relmse(renders, ref, seconds):
+    """The variance part of relMSE, from independent renders alone: the mean over their pairs of
+    (a - b)^2 / 2 / (ref^2 + 0.01), at exactly `seconds`. The reference's own noise, which
+    relmse() adds to every row alike (it matters once the renders are nearly as good as the
+    reference), drops out; so does bias, which the mean / ref column shows apart."""
+    es = []
+    for i in range(len(renders)):
+        for j in range(i + 1, len(renders)):
+            (a, sa), (b, sb) = renders[i], renders[j]
+            ok = np.all(np.isfinite(a) & np.isfinite(b), axis=-1)
+            d = a[ok] - b[ok]
+            es.append(float(np.mean(d * d / (ref[ok] ** 2 + 0.01))) / 2 * (sa + sb) / 2 / seconds)
+    return statistics.mean(es) if es else float("nan")
+
+
 class Mitsuba:
     def __init__(self, path):
         self.scene = tm.load(tm.convert(path))
@@ -62,10 +79,20 @@ class Mitsuba:
             self.timed(seconds, 0, None)
 
     def render(self, spp, seed):
-        img = mi.render(self.scene, spp=spp, seed=seed)
-        dr.eval(img)
+        # A launch takes under 2^32 samples (larger ones Mitsuba splits only in multiples of its
+        # wavefront, and fails otherwise): a GPU's long renders go in chunks, each with a seed of
+        # its own, averaged by sample count.
+        most = max(1, (2 ** 32 - 1) // self.pixels)
+        chunks = []
+        while sum(n for n, _ in chunks) < spp:
+            n = min(most, spp - sum(n for n, _ in chunks))
+            img = mi.render(self.scene, spp=n, seed=seed * 1009 + len(chunks))
+            dr.eval(img)
+            chunks.append((n, img))
         dr.sync_thread()
-        return img
+        if len(chunks) == 1:
+            return chunks[0][1]
+        return sum(n * np.array(img, dtype=np.float64) for n, img in chunks) / spp
 
     def timed(self, seconds, seed, out):
         spp = max(1, round(seconds * self.rate / self.pixels))
@@ -74,7 +101,7 @@ class Mitsuba:
         wall = time.time() - t
         self.rate = spp * self.pixels / wall
         if out:
-            mi.Bitmap(img).write(out)
+            mi.Bitmap(np.asarray(img, dtype=np.float32)).write(out)
         return spp, wall
 
 
@@ -126,24 +153,26 @@ def main():
             img = rgb(out)
             e = relmse(img, ref) * wall / a.time
             rows["mitsuba"].append((e, spp * m.pixels / wall / 1e6, spp, wall,
-                                    img.mean() / ref.mean()))
+                                    img.mean() / ref.mean(), img))
             for label, opts in sets:
                 out = os.path.join(a.out, "%s-%s-%d.exr" % (name, re.sub(r"\W", "_", label), r))
                 spp, secs, rate = illum(a.illum, scene, a.time, r + 1, opts, out)
                 img = rgb(out)
                 e = relmse(img, ref) * secs / a.time
-                rows[label].append((e, rate, spp, secs, img.mean() / ref.mean()))
+                rows[label].append((e, rate, spp, secs, img.mean() / ref.mean(), img))
         mine = statistics.median(x[0] for x in rows["mitsuba"])
+        pairs = {k: pair_relmse([(x[5], x[3]) for x in xs], ref, a.time) for k, xs in rows.items()}
         print("\n%s (Mitsuba warm-up render incl. JIT: %.2f s)" % (scene, m.warmup_s))
-        print("| renderer / illum options | relMSE at %g s | x Mitsuba | M camera samples/s | spp | mean / ref |"
-              % a.time)
-        print("|---|---|---|---|---|---|")
+        print("| renderer / illum options | relMSE at %g s | x Mitsuba | from pairs | x Mitsuba "
+              "| M camera samples/s | spp | mean / ref |" % a.time)
+        print("|---|---|---|---|---|---|---|---|")
         for label, xs in rows.items():
             e = statistics.median(x[0] for x in xs)
             opts = dict(sets).get(label, "")
-            print("| %s%s | %.3g (%s) | %.2f | %.2f | %d | %.4f |"
+            print("| %s%s | %.3g (%s) | %.2f | %.3g | %.2f | %.2f | %d | %.4f |"
                   % (label, " `%s`" % opts if opts else "", e,
-                     ", ".join("%.3g" % x[0] for x in xs), e / mine,
+                     ", ".join("%.3g" % x[0] for x in xs), e / mine, pairs[label],
+                     pairs[label] / pairs["mitsuba"],
                      statistics.median(x[1] for x in xs), statistics.median(x[2] for x in xs),
                      statistics.mean(x[4] for x in xs)), flush=True)
 
