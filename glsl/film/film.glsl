@@ -16,7 +16,7 @@ vec3 camera_direction(vec2 film_uv) {
 // Sample `sample_index` of pixel pix in pass p: its random numbers and its camera ray's direction d (from
 // frame.cam_origin).
 vec3 film_camera_ray(PassConstants p, uvec2 pix, uint pixel, uint sample_index, out Rng rng) {
-    rng = rng_init(p.seed_lo, p.seed_hi, pixel, sample_index);
+    rng = rng_init_camera(p.seed_lo, p.seed_hi, pixel, sample_index);
     vec2 film_uv = (vec2(pix) + rng_next2(rng)) / vec2(frame.width, frame.height);
     return camera_direction(film_uv);
 }

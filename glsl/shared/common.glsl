@@ -6,27 +6,81 @@ const float PI = 3.14159265358979323846;
 const float INV_PI = 0.31830988618379067154;
 const float INF = 1.0 / 0.0;
 
-// Deterministic per-sample random stream: the state depends only on (seed, pixel, sample index),
+// Deterministic per-sample random streams: a stream depends only on (seed, pixel, sample index),
 // so any split of a render into sample ranges or tiles reproduces exactly the same samples.
+// Two kinds:
+// * camera samples (rng_init_camera): draw k takes dimension pair k of a shuffled, Owen-scrambled
+//   Sobol (0,2)-sequence over the pixel's sample indices, scrambled per (seed, pixel, k) (Burley
+//   2020, "Practical Hash-based Owen Scrambling"; padded pairs, as pbrt-v4's PaddedSobolSampler).
+//   Every point is uniform, so every estimator stays unbiased; over a pixel's first 2^m even (or
+//   odd) samples each pair is stratified in every elementary interval. A single draw takes a pair
+//   of its own.
+// * everything else (rng_init: cache-update paths, test kernels): PCG, independent draws.
 uint hash_u32(uint x) {  // lowbias32 (Wellons)
     x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16;
     return x;
 }
-struct Rng { uint state; };
+const uint RNG_PCG = 0xffffffffu;  // Rng.dim of a PCG stream
+struct Rng { uint state; uint index; uint dim; };
 Rng rng_init(uint seed_lo, uint seed_hi, uint pixel, uint sample_index) {
     uint h = hash_u32(seed_lo ^ hash_u32(seed_hi + 0x9e3779b9u));
     h = hash_u32(h ^ pixel);
     h = hash_u32(h ^ (sample_index * 0x85ebca6bu + 0x68e31da4u));
-    return Rng(h);
+    return Rng(h, 0u, RNG_PCG);
 }
-// PCG-RXS-M-XS 32; returns a float in [0, 1) built from 24 bits, so 1 - u >= 2^-24 (never log(0)).
-float rng_next(inout Rng r) {
+Rng rng_init_camera(uint seed_lo, uint seed_hi, uint pixel, uint sample_index) {
+    uint h = hash_u32(seed_lo ^ hash_u32(seed_hi + 0x7f4a7c15u));
+    // Even and odd samples are two sequences with scrambles of their own: independent, so the
+    // even/odd half-buffers still estimate the error (one sequence's halves would be
+    // anti-correlated, and the estimate too high).
+    h = hash_u32(hash_u32(h ^ pixel) ^ (sample_index & 1u) * 0x2545f491u);
+    return Rng(h, sample_index >> 1u, 0u);
+}
+// Laine-Karras hash with Burley 2020's constants: an Owen scramble of x's bits when x holds the
+// digits in reverse (least significant bit = first binary digit), each bit changed only by
+// itself, lower bits and the seed.
+uint lk_scramble(uint x, uint seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+// Sobol's second dimension with its digits reversed (bit j = digit j + 1): the Pascal matrix
+// mod 2, bit j = XOR of the index bits k with k a bit-superset of j (Lucas), as a superset
+// transform in five steps; the first dimension reversed is the index itself.
+uint sobol1_reversed(uint i) {
+    i ^= (i >> 1u) & 0x55555555u;
+    i ^= (i >> 2u) & 0x33333333u;
+    i ^= (i >> 4u) & 0x0f0f0f0fu;
+    i ^= (i >> 8u) & 0x00ff00ffu;
+    i ^= (i >> 16u) & 0x0000ffffu;
+    return i;
+}
+// 24 bits to [0, 1), so 1 - u >= 2^-24 (never log(0)).
+float rng_float(uint x) { return float(x >> 8) * (1.0 / 16777216.0); }
+vec2 rng_sobol2(inout Rng r) {
+    uint seed = hash_u32(r.state ^ hash_u32(r.dim * 0x9e3779b9u + 0x632be5abu));
+    r.dim += 1u;
+    // Shuffle: an Owen scramble of the index (Burley 2020), so that pairs are decorrelated.
+    uint i = bitfieldReverse(lk_scramble(bitfieldReverse(r.index), seed));
+    uint x = bitfieldReverse(lk_scramble(i, hash_u32(seed ^ 0xa511e9b3u)));
+    uint y = bitfieldReverse(lk_scramble(sobol1_reversed(i), hash_u32(seed ^ 0x63d83595u)));
+    return vec2(rng_float(x), rng_float(y));
+}
+// PCG-RXS-M-XS 32.
+float rng_pcg(inout Rng r) {
     r.state = r.state * 747796405u + 2891336453u;
     uint w = ((r.state >> ((r.state >> 28u) + 4u)) ^ r.state) * 277803737u;
-    w = (w >> 22u) ^ w;
-    return float(w >> 8) * (1.0 / 16777216.0);
+    return rng_float((w >> 22u) ^ w);
 }
-vec2 rng_next2(inout Rng r) { return vec2(rng_next(r), rng_next(r)); }
+float rng_next(inout Rng r) { return r.dim == RNG_PCG ? rng_pcg(r) : rng_sobol2(r).x; }
+vec2 rng_next2(inout Rng r) {
+    if (r.dim != RNG_PCG) return rng_sobol2(r);
+    float a = rng_pcg(r);
+    return vec2(a, rng_pcg(r));
+}
 
 // True for NaN and +-Inf; a bit test, since isnan/isinf may be folded away by the compiler.
 bool non_finite(float x) { return (floatBitsToUint(x) & 0x7fffffffu) >= 0x7f800000u; }

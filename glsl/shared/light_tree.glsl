@@ -82,7 +82,7 @@ float light_tree_walk(uint64_t tree, vec3 p, vec3 n, bool draw, uint trail, inou
 
 // The probability that light_tree_walk's sampler picks `light` at (p, n).
 float light_tree_pmf(uint64_t tree, uint64_t trails, vec3 p, vec3 n, uint light) {
-    Rng unused = Rng(0u);
+    Rng unused = Rng(0u, 0u, RNG_PCG);
     uint found;
     float pmf = light_tree_walk(tree, p, n, false, LightTrailRef(trails).v[light], unused, found);
     return found == light ? pmf : 0.0;
