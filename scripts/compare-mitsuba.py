@@ -67,8 +67,10 @@ def pair_relmse(renders, ref, seconds):
 
 
 class Mitsuba:
-    def __init__(self, path):
-        self.scene = tm.load(tm.convert(path))
+    def __init__(self, path, sampler="independent"):
+        d = tm.convert(path)
+        d["sensor"]["sampler"]["type"] = sampler
+        self.scene = tm.load(d)
         w, h = self.scene.sensors()[0].film().size()
         self.pixels = int(w) * int(h)
         t = time.time()
@@ -99,6 +101,8 @@ class Mitsuba:
         t = time.time()
         img = self.render(spp, seed)
         wall = time.time() - t
+        # Samplers other than `independent` round the count (ldsampler: to a power of two).
+        spp = self.scene.sensors()[0].sampler().sample_count()
         self.rate = spp * self.pixels / wall
         if out:
             mi.Bitmap(np.asarray(img, dtype=np.float32)).write(out)
@@ -129,16 +133,19 @@ def main():
     ap.add_argument("--illum", default=os.path.join(HERE, "..", "target", "release", "illum"))
     ap.add_argument("--out", default="/tmp/compare-mitsuba")
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--mi-sampler", default="independent",
+                    help="Mitsuba's sampler: independent (its default), ldsampler (scrambled "
+                         "(0,2)-sequence, power-of-two counts), multijitter, ...")
     a = ap.parse_args()
     mi.set_variant(a.variant)
     sets = [s.split("=", 1) for s in (a.set or ["default="])]
     os.makedirs(a.out, exist_ok=True)
-    print("Mitsuba %s (%s), drjit %s, %d threads; T = %g s, reference %g s, %d rounds"
-          % (mi.__version__, a.variant, dr.__version__, dr.thread_count(), a.time, a.ref_time,
-             a.rounds))
+    print("Mitsuba %s (%s, %s sampler), drjit %s, %d threads; T = %g s, reference %g s, %d rounds"
+          % (mi.__version__, a.variant, a.mi_sampler, dr.__version__, dr.thread_count(), a.time,
+             a.ref_time, a.rounds))
     for scene in a.scenes:
         name = os.path.splitext(os.path.basename(scene))[0]
-        m = Mitsuba(scene)
+        m = Mitsuba(scene, a.mi_sampler)
         ref_path = os.path.join(a.out, name + "-ref.exr")
         if not os.path.exists(ref_path):
             spp, wall = m.timed(a.ref_time, 999, ref_path)
