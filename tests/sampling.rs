@@ -2,8 +2,10 @@
 //! sample_light.comp, irradiance_check.comp, mis_check.comp), and the dome tables of
 //! src/render/dome.rs: chi-square tests of every light sampler against its own pdf(), pdf
 //! consistency per sample, analytic irradiance against float64 references validated by Monte Carlo
-//! (z-tests), and the MIS weights at extreme pdfs.
+//! (z-tests), the MIS weights at extreme pdfs, and the camera-sample streams (scrambled Sobol).
 
+#[path = "sampling/camera_streams.rs"]
+mod camera_streams;
 #[path = "sampling/dome.rs"]
 mod dome_sampling;
 mod sampling_support;

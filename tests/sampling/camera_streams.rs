@@ -1,0 +1,111 @@
+//! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`): shuffled, Owen-scrambled
+//! Sobol pairs. Their structure is checked exactly (the first 2^m even, or odd, samples of a pixel
+//! put one point of every pair in each elementary interval of area 2^-m), and their randomization
+//! by chi-square tests over many pixels: each point uniform, and pairs of one sample, and the even
+//! and the odd sequence, independent of each other.
+
+use super::*;
+
+fn draw(k: &Kernel, inputs: &[[u32; 4]]) -> Vec<[f32; 4]> {
+    k.run(&[0u32; 4], inputs, 0, inputs.len(), 0, inputs.len())
+}
+
+/// Chi-square test of `points` against the uniform density on a `bins` × `bins` grid.
+fn chi2_uniform_2d(what: &str, points: &[(f32, f32)], bins: usize) {
+    let mut counts = vec![0u32; bins * bins];
+    for &(x, y) in points {
+        assert!(
+            (0.0..1.0).contains(&x) && (0.0..1.0).contains(&y),
+            "{what}: ({x}, {y})"
+        );
+        let (i, j) = ((x * bins as f32) as usize, (y * bins as f32) as usize);
+        counts[j * bins + i] += 1;
+    }
+    let expected = points.len() as f64 / (bins * bins) as f64;
+    let chi2: f64 = counts
+        .iter()
+        .map(|&c| (f64::from(c) - expected).powi(2) / expected)
+        .sum();
+    let dof = (bins * bins - 1) as f64;
+    let p = chi2_sf(chi2, dof);
+    eprintln!("{what}: chi2 = {chi2:.1}, dof = {dof}, p = {p:.3e}");
+    assert!(
+        p > alpha(),
+        "{what}: chi2 = {chi2:.1} for {dof} dof, p = {p:.3e}"
+    );
+}
+
+#[test]
+fn camera_streams_are_scrambled_sobol_nets() {
+    let ctx = context();
+    let k = Kernel::new(&ctx, "rng_check", illum::shaders::RNG_CHECK_PLAIN);
+    const M: u32 = 8;
+    for (seed, pixel) in [(0u32, 0u32), (7, 12345), (0xdead_beef, 3)] {
+        for pair in [0u32, 1, 5] {
+            for parity in [0u32, 1] {
+                let inputs: Vec<[u32; 4]> = (0..1u32 << M)
+                    .map(|j| [seed, pixel, 2 * j + parity, pair])
+                    .collect();
+                let out = draw(&k, &inputs);
+                // Every shape of elementary interval: 2^a columns by 2^(M - a) rows.
+                for a in 0..=M {
+                    let (cols, rows) = (1u32 << a, 1u32 << (M - a));
+                    let mut seen = vec![false; 1 << M];
+                    for o in &out {
+                        let cell =
+                            ((o[1] * rows as f32) as u32) * cols + (o[0] * cols as f32) as u32;
+                        assert!(
+                            !std::mem::replace(&mut seen[cell as usize], true),
+                            "seed {seed} pixel {pixel} pair {pair} parity {parity}: two points in \
+                             one {cols} x {rows} interval"
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn camera_streams_are_uniform_and_independent() {
+    let ctx = context();
+    let k = Kernel::new(&ctx, "rng_check", illum::shaders::RNG_CHECK_PLAIN);
+    const N: u32 = 1 << 16;
+    // Over pixels, at a fixed sample index and pair: (seed, pixel, index, pair).
+    let at = |index: u32, pair: u32| -> Vec<[f32; 4]> {
+        let inputs: Vec<[u32; 4]> = (0..N).map(|p| [11, p, index, pair]).collect();
+        draw(&k, &inputs)
+    };
+    let a = at(6, 2);
+    let b = at(6, 3);
+    let odd = at(7, 2);
+    chi2_uniform_2d(
+        "pair 2 at sample 6",
+        &a.iter().map(|o| (o[0], o[1])).collect::<Vec<_>>(),
+        16,
+    );
+    chi2_uniform_2d(
+        "pairs 2 and 3 of one sample (x, x)",
+        &a.iter()
+            .zip(&b)
+            .map(|(p, q)| (p[0], q[0]))
+            .collect::<Vec<_>>(),
+        16,
+    );
+    chi2_uniform_2d(
+        "samples 6 and 7: the even and the odd sequence (y, y)",
+        &a.iter()
+            .zip(&odd)
+            .map(|(p, q)| (p[1], q[1]))
+            .collect::<Vec<_>>(),
+        16,
+    );
+    // Sample 0 of every pixel: the first points of the sequences are random too.
+    chi2_uniform_2d(
+        "pair 0 at sample 0",
+        &at(0, 0).iter().map(|o| (o[0], o[1])).collect::<Vec<_>>(),
+        16,
+    );
+    assert_no_validation_messages(&ctx);
+}
