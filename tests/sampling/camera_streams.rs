@@ -1,6 +1,6 @@
 //! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`): shuffled, Owen-scrambled
-//! Sobol pairs. Their structure is checked exactly (the first 2^m even, or odd, samples of a pixel
-//! put one point of every pair in each elementary interval of area 2^-m), and their randomization
+//! Sobol pairs. Their structure is checked exactly (the first 2^17 even, or odd, samples of a pixel
+//! put one point of every pair in each elementary interval of area 2^-17), and their randomization
 //! by chi-square tests over many pixels: each point uniform, and pairs of one sample, and the even
 //! and the odd sequence, independent of each other.
 
@@ -39,9 +39,10 @@ fn chi2_uniform_2d(what: &str, points: &[(f32, f32)], bins: usize) {
 fn camera_streams_are_scrambled_sobol_nets() {
     let ctx = context();
     let k = Kernel::new(&ctx, "rng_check", illum::shaders::RNG_CHECK_PLAIN);
-    const M: u32 = 8;
-    for (seed, pixel) in [(0u32, 0u32), (7, 12345), (0xdead_beef, 3)] {
-        for pair in [0u32, 1, 5] {
+    // 2^17 points: the Sobol matrix's every step (bits 16 and up too) shapes some interval.
+    const M: u32 = 17;
+    for (seed, pixel) in [(7u32, 12345u32), (0xdead_beef, 3)] {
+        for pair in [0u32, 5] {
             for parity in [0u32, 1] {
                 let inputs: Vec<[u32; 4]> = (0..1u32 << M)
                     .map(|j| [seed, pixel, 2 * j + parity, pair])
