@@ -106,7 +106,7 @@ fn stratified_dome_samples_match_the_quadrature_of_the_map() {
     assert!(e.min_element() > 0.0);
     let integrator = IntegratorSettings {
         technique: Technique::Light,
-        // A textured dome takes 2 N_max samples: 8 row strata.
+        // A textured dome takes 8 N_max samples: 32 row strata.
         light_samples: 4,
         ..Default::default()
     };
