@@ -81,32 +81,16 @@ fn camera_streams_are_uniform_and_independent() {
     let a = at(6, 2);
     let b = at(6, 3);
     let odd = at(7, 2);
-    chi2_uniform_2d(
-        "pair 2 at sample 6",
-        &a.iter().map(|o| (o[0], o[1])).collect::<Vec<_>>(),
-        16,
-    );
-    chi2_uniform_2d(
-        "pairs 2 and 3 of one sample (x, x)",
-        &a.iter()
-            .zip(&b)
-            .map(|(p, q)| (p[0], q[0]))
-            .collect::<Vec<_>>(),
-        16,
-    );
-    chi2_uniform_2d(
-        "samples 6 and 7: the even and the odd sequence (y, y)",
-        &a.iter()
-            .zip(&odd)
-            .map(|(p, q)| (p[1], q[1]))
-            .collect::<Vec<_>>(),
-        16,
-    );
+    // (coordinate i of p, coordinate j of q) per pixel.
+    let zip = |p: &[[f32; 4]], q: &[[f32; 4]], i: usize, j: usize| -> Vec<(f32, f32)> {
+        p.iter().zip(q).map(|(p, q)| (p[i], q[j])).collect()
+    };
+    chi2_uniform_2d("pair 2 at sample 6", &zip(&a, &a, 0, 1), 16);
+    chi2_uniform_2d("pairs 2 and 3 of one sample (x, x)", &zip(&a, &b, 0, 0), 16);
+    let what = "samples 6 and 7: the even and the odd sequence (y, y)";
+    chi2_uniform_2d(what, &zip(&a, &odd, 1, 1), 16);
     // Sample 0 of every pixel: the first points of the sequences are random too.
-    chi2_uniform_2d(
-        "pair 0 at sample 0",
-        &at(0, 0).iter().map(|o| (o[0], o[1])).collect::<Vec<_>>(),
-        16,
-    );
+    let first = at(0, 0);
+    chi2_uniform_2d("pair 0 at sample 0", &zip(&first, &first, 0, 1), 16);
     assert_no_validation_messages(&ctx);
 }
