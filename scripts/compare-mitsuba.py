@@ -81,28 +81,29 @@ class Mitsuba:
             self.timed(seconds, 0, None)
 
     def render(self, spp, seed):
-        # A launch takes under 2^32 samples (larger ones Mitsuba splits only in multiples of its
-        # wavefront, and fails otherwise): a GPU's long renders go in chunks, each with a seed of
-        # its own, averaged by sample count.
-        most = max(1, (2 ** 32 - 1) // self.pixels)
+        """At least `spp` samples per pixel: (image, samples rendered). A launch takes under 2^32
+        samples (larger ones Mitsuba splits only in multiples of its wavefront, and fails
+        otherwise), so a GPU's long renders go in chunks, each with a seed of its own, averaged by
+        the count each really took: samplers other than `independent` round it up (ldsampler: to
+        a power of two, so the chunk size is one too and never rounds past the limit)."""
+        most = 1 << max(0, ((2 ** 32 - 1) // self.pixels).bit_length() - 1)
         chunks = []
-        while sum(n for n, _ in chunks) < spp:
-            n = min(most, spp - sum(n for n, _ in chunks))
-            img = mi.render(self.scene, spp=n, seed=seed * 1009 + len(chunks))
+        done = 0
+        while done < spp:
+            img = mi.render(self.scene, spp=min(most, spp - done), seed=seed * 1009 + len(chunks))
             dr.eval(img)
+            n = self.scene.sensors()[0].sampler().sample_count()
             chunks.append((n, img))
+            done += n
         dr.sync_thread()
         if len(chunks) == 1:
-            return chunks[0][1]
-        return sum(n * np.array(img, dtype=np.float64) for n, img in chunks) / spp
+            return chunks[0][1], done
+        return sum(n * np.array(img, dtype=np.float64) for n, img in chunks) / done, done
 
     def timed(self, seconds, seed, out):
-        spp = max(1, round(seconds * self.rate / self.pixels))
         t = time.time()
-        img = self.render(spp, seed)
+        img, spp = self.render(max(1, round(seconds * self.rate / self.pixels)), seed)
         wall = time.time() - t
-        # Samplers other than `independent` round the count (ldsampler: to a power of two).
-        spp = self.scene.sensors()[0].sampler().sample_count()
         self.rate = spp * self.pixels / wall
         if out:
             mi.Bitmap(np.asarray(img, dtype=np.float32)).write(out)

@@ -242,13 +242,13 @@ bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffus
 // an untextured light, the host's exact mean of it on a textured one, L_SH(w) on a textured dome.
 vec3 control_radiance(GpuLight l, GpuDomeSampling dome, vec3 w) {
     if (l.kind == LIGHT_SUN) return light_radiance(l, vec2(0.0), l.p1.x <= 0.0);
-    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME && dome.width > 0u) return sh9_eval(dome.sh, w);
+    if (light_is(l, LIGHT_DOME) && dome.width > 0u) return sh9_eval(dome.sh, w);
     return l.texture == NONE ? l.radiance : l.mean;
 }
 
 // E, the integral of Lc max(0, n.w) over the light as its sampler covers it.
 vec3 control_irradiance(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 n) {
-    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME)
+    if (light_is(l, LIGHT_DOME))
         return dome.width > 0u ? sh9_irradiance(dome.sh, n) : PI * l.radiance;
     vec3 lc = control_radiance(l, dome, vec3(0.0));
     if (l.kind == LIGHT_SUN && l.p1.x > 0.0) {

@@ -232,11 +232,11 @@ vec3 sh9_irradiance(vec4 c[9], vec3 n) { return sh9_sum(c, n, vec3(PI, 2.0 * PI 
 // lights, E / E_perp for the sun, 0 for the dome (see the header).
 float light_irradiance(GpuLight l, vec3 p, vec3 n) {
     bool two = (l.flags & LIGHT_FLAG_TWO_SIDED) != 0u;
-    if (has_feature(FEATURE_RECT_LIGHTS) && l.kind == LIGHT_RECT) return irradiance_rect(p, n, l.p0.xyz, l.p1.xyz, l.p2.xyz, two);
-    if (has_feature(FEATURE_DISK_LIGHTS) && l.kind == LIGHT_DISK) return irradiance_disk(p, n, l.p0.xyz, l.p1.xyz, l.p2.xyz, l.p0.w, two);
-    if (has_feature(FEATURE_SPHERE_LIGHTS) && l.kind == LIGHT_SPHERE) return irradiance_sphere(p, n, l.p0.xyz, l.p0.w, two);
-    if (has_feature(FEATURE_SUN) && l.kind == LIGHT_SUN) return irradiance_sun(n, l.p0.xyz, l.p1.x);
-    if (has_feature(FEATURE_TRIANGLE_LIGHTS) && l.kind == LIGHT_TRIANGLE) return irradiance_triangle(p, n, l.p0.xyz, l.p1.xyz, l.p2.xyz, two);
+    if (light_is(l, LIGHT_RECT)) return irradiance_rect(p, n, l.p0.xyz, l.p1.xyz, l.p2.xyz, two);
+    if (light_is(l, LIGHT_DISK)) return irradiance_disk(p, n, l.p0.xyz, l.p1.xyz, l.p2.xyz, l.p0.w, two);
+    if (light_is(l, LIGHT_SPHERE)) return irradiance_sphere(p, n, l.p0.xyz, l.p0.w, two);
+    if (light_is(l, LIGHT_SUN)) return irradiance_sun(n, l.p0.xyz, l.p1.x);
+    if (light_is(l, LIGHT_TRIANGLE)) return irradiance_triangle(p, n, l.p0.xyz, l.p1.xyz, l.p2.xyz, two);
     return 0.0;
 }
 

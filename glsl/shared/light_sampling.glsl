@@ -621,22 +621,22 @@ LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 w) {
 // kernel holds the samplers of the kinds it has (10% less LLVM time for a rect and a dome).
 
 LightSample sample_light(GpuLight l, GpuDomeSampling dome, vec3 p, vec2 u) {
-    if (has_feature(FEATURE_RECT_LIGHTS) && l.kind == LIGHT_RECT) return sample_rect(l, p, u);
-    if (has_feature(FEATURE_SPHERE_LIGHTS) && l.kind == LIGHT_SPHERE) return sample_sphere(l, p, u);
-    if (has_feature(FEATURE_DISK_LIGHTS) && l.kind == LIGHT_DISK) return sample_disk(l, p, u);
-    if (has_feature(FEATURE_SUN) && l.kind == LIGHT_SUN) return sample_sun(l, u);
-    if (has_feature(FEATURE_TRIANGLE_LIGHTS) && l.kind == LIGHT_TRIANGLE) return sample_triangle(l, p, u);
-    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME) return sample_dome(l, dome, u);
+    if (light_is(l, LIGHT_RECT)) return sample_rect(l, p, u);
+    if (light_is(l, LIGHT_SPHERE)) return sample_sphere(l, p, u);
+    if (light_is(l, LIGHT_DISK)) return sample_disk(l, p, u);
+    if (light_is(l, LIGHT_SUN)) return sample_sun(l, u);
+    if (light_is(l, LIGHT_TRIANGLE)) return sample_triangle(l, p, u);
+    if (light_is(l, LIGHT_DOME)) return sample_dome(l, dome, u);
     return no_light_sample();
 }
 
 LightHit light_hit(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 w) {
-    if (has_feature(FEATURE_RECT_LIGHTS) && l.kind == LIGHT_RECT) return rect_hit(l, p, w);
-    if (has_feature(FEATURE_SPHERE_LIGHTS) && l.kind == LIGHT_SPHERE) return sphere_hit(l, p, w);
-    if (has_feature(FEATURE_DISK_LIGHTS) && l.kind == LIGHT_DISK) return disk_hit(l, p, w);
-    if (has_feature(FEATURE_SUN) && l.kind == LIGHT_SUN) return sun_hit(l, w);
-    if (has_feature(FEATURE_TRIANGLE_LIGHTS) && l.kind == LIGHT_TRIANGLE) return triangle_hit(l, p, w);
-    if (has_feature(FEATURE_DOME) && l.kind == LIGHT_DOME) return dome_hit(l, dome, w);
+    if (light_is(l, LIGHT_RECT)) return rect_hit(l, p, w);
+    if (light_is(l, LIGHT_SPHERE)) return sphere_hit(l, p, w);
+    if (light_is(l, LIGHT_DISK)) return disk_hit(l, p, w);
+    if (light_is(l, LIGHT_SUN)) return sun_hit(l, w);
+    if (light_is(l, LIGHT_TRIANGLE)) return triangle_hit(l, p, w);
+    if (light_is(l, LIGHT_DOME)) return dome_hit(l, dome, w);
     return light_miss();
 }
 

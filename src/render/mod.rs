@@ -348,13 +348,7 @@ impl Renderer {
                                 tile: [x0, y0, TILE.min(window.x1 - x0), TILE.min(window.y1 - y0)],
                             };
                             ctx.one_shot(|cmd| {
-                                if let Some(t) = &timer {
-                                    t.start(cmd);
-                                }
-                                kernel.record(cmd, &pc);
-                                if let Some(t) = &timer {
-                                    t.stop(cmd);
-                                }
+                                GpuTimer::around(timer.as_ref(), cmd, || kernel.record(cmd, &pc))
                             })?;
                             if let Some(t) = &timer {
                                 device += t.seconds()?;

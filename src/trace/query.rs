@@ -95,14 +95,13 @@ impl QueryKernel {
             };
             let t = Instant::now();
             ctx.one_shot(|cmd| {
-                if let Some(t) = &timer {
-                    t.start(cmd);
-                }
-                self.pipeline
-                    .dispatch(cmd, bytemuck::bytes_of(&pc), [count.div_ceil(GROUP), 1, 1]);
-                if let Some(t) = &timer {
-                    t.stop(cmd);
-                }
+                GpuTimer::around(timer.as_ref(), cmd, || {
+                    self.pipeline.dispatch(
+                        cmd,
+                        bytemuck::bytes_of(&pc),
+                        [count.div_ceil(GROUP), 1, 1],
+                    )
+                })
             })?;
             seconds += t.elapsed().as_secs_f64();
             if let (Some(t), Some(d)) = (&timer, device.as_mut()) {

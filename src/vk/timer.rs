@@ -58,6 +58,22 @@ impl GpuTimer {
         }
     }
 
+    /// Records `record` into `cmd` between the two timestamps of `timer`, or alone without one.
+    pub fn around<R>(
+        timer: Option<&GpuTimer>,
+        cmd: vk::CommandBuffer,
+        record: impl FnOnce() -> R,
+    ) -> R {
+        if let Some(t) = timer {
+            t.start(cmd);
+        }
+        let r = record();
+        if let Some(t) = timer {
+            t.stop(cmd);
+        }
+        r
+    }
+
     /// Seconds between the two timestamps of the last completed submission.
     pub fn seconds(&self) -> Result<f64> {
         let mut t = [0u64; 2];
