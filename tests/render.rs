@@ -35,6 +35,54 @@ fn camera_inside_a_sphere_sees_its_radius_everywhere() {
     assert_eq!(out.stats.non_finite_samples, 0);
 }
 
+/// A ground sphere of radius R under a camera 1.5 above it, looking straight down (up to 1e15,
+/// where f64 still resolves 1.5 at R), and cameras inside spheres of radius 1e20 and 1e29: the
+/// f32 form f.f - r^2 put the ground 40% too far at 1e7, let rays pass through it from 1e8 and
+/// lost the spheres from 1e20 (f32 overflow).
+#[test]
+fn huge_spheres_are_hit_where_they_are() {
+    let ctx = context();
+    for r in [1e3, 1e7, 1e8, 1e12, 1e15] {
+        let json = format!(
+            r#"{{"camera": {{"position": [0, 1.5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1], "fov_y": 20, "resolution": [9, 9]}},
+               "materials": {{"m": {{"diffuse": [0.5, 0.5, 0.5]}}}},
+               "shapes": {{"ground": {{"sphere": {{"center": [0, {}, 0], "radius": {r:e}}}, "material": "m"}}}},
+               "lights": {{"sky": {{"dome": {{}}, "color": [1, 1, 1]}}}}}}"#,
+            -r
+        );
+        let out = render_with(&ctx, &scene(&json), 64, 0);
+        // The centre pixel spans 2.2 degrees about straight down: depth 1.5 to 1.5 (1 + 3e-4).
+        let z = f64::from(out.film.depth[4 * 9 + 4]);
+        assert!((z - 1.5).abs() < 1.5e-3, "R = {r:e}: depth {z}, expected 1.5");
+        // Lit by the sky above: half the albedo (Lambert under a unit dome), not the dome seen
+        // through the ground.
+        let b = out.film.beauty[4 * 9 + 4];
+        eprintln!("R = {r:e}: depth {z}, beauty {b:?}");
+        assert!((f64::from(b[0]) - 0.5).abs() < 0.05, "R = {r:e}: beauty {b:?}");
+    }
+    for r in [1e20, 1e29] {
+        let inside = format!(
+            r#"{{"camera": {{"position": [3, 4, 0], "look_at": [3, 5, 1], "fov_y": 60, "resolution": [8, 6]}},
+               "materials": {{"m": {{"diffuse": [0.5, 0.5, 0.5]}}}},
+               "shapes": {{"sky": {{"sphere": {{"center": [0, 0, 0], "radius": {r:e}}}, "material": "m"}}}}}}"#
+        );
+        let out = render_with(&ctx, &scene(&inside), 2, 0);
+        for (i, &z) in out.film.depth.iter().enumerate() {
+            let rel = (f64::from(z) / r - 1.0).abs();
+            assert!(rel < 1e-5, "R = {r:e}, pixel {i}: Z = {z}, expected R");
+        }
+    }
+    let big = r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0, 0], "fov_y": 40, "resolution": [4, 4]},
+        "materials": {"m": {"diffuse": [0.5, 0.5, 0.5]}},
+        "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1e39}, "material": "m"}}}"#;
+    let e = illum::scene::from_json_str(big, "big.json", std::path::Path::new("."))
+        .err()
+        .expect("a radius of 1e39 is refused")
+        .to_string();
+    assert!(e.contains("shapes.s.sphere.radius") && e.contains("1e30"), "{e}");
+    assert_no_validation_messages(&ctx);
+}
+
 #[test]
 fn depth_of_a_quad_at_a_known_distance() {
     let (w, h, fov, spp) = (32u32, 24u32, 40.0, 64u32);

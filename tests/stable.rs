@@ -422,6 +422,12 @@ fn ray_sphere_f64(c: DVec3, r: f64, o: DVec3, d: DVec3) -> (f64, f64) {
     (if lo > 0.0 { lo } else { hi }, disc)
 }
 
+/// What the host uploads beside a sphere (gpu_scene encode): the frame origin's signed distance
+/// to the surface, |c| - r, and to the centre, |c|, in f64.
+fn sphere_hc(c: DVec3, r: f64) -> [f32; 4] {
+    [(c.length() - r) as f32, c.length() as f32, 0.0, 0.0]
+}
+
 /// The classic float32 form with b^2 - c (TECHNIQUES.md 7.4): 10000.0 instead of 9999.564 at
 /// 0.9 r off axis, 1e4 away.
 fn ray_sphere_naive_f32(c: DVec3, r: f64, o: DVec3, d: DVec3) -> f64 {
@@ -486,7 +492,7 @@ fn ray_sphere_is_precise_far_away() {
                 v4(*c, *r),
                 v4(*o, 0.0),
                 v4(*d, 0.0),
-                [0.0; 4],
+                sphere_hc(*c, *r),
                 DVec3::ZERO,
                 CASE_RAY_SPHERE,
             )
@@ -529,6 +535,74 @@ fn ray_sphere_is_precise_far_away() {
     assert!(worst_ulps_09 < 2.0, "{worst_ulps_09}");
     assert!(worst_cond < 1.0, "{worst_cond}");
     assert!(worst_naive_09 > 100.0, "the naive formula should fail here");
+    assert_no_validation_messages(&ctx);
+}
+
+/// Spheres up to 1e29 across, their surface 1.5 below the frame origin (a ground sphere under a
+/// camera; the host gives that distance, |c| - r, in f64), seen from the origin and from shading
+/// points away from it, and a sphere of radius 1e20 enclosing them. The f32 form f.f - r^2
+/// rounds to a multiple of 8 at r = 1e8 (rays pass through the surface) and overflows from
+/// 1.8e19 (the sphere vanishes).
+#[test]
+fn ray_sphere_is_precise_for_huge_spheres() {
+    let ctx = context();
+    // (name, centre, radius, (|c| - r, |c|), origin, direction, true t)
+    let mut configs = Vec::new();
+    for r in [1e3, 1e6, 1e7, 1e8, 1e12, 1e15, 1e20, 1e29] {
+        let c = DVec3::new(0.0, -(r + 1.5), 0.0);
+        let hc = [1.5f32, (r + 1.5) as f32, 0.0, 0.0];
+        for o in [DVec3::ZERO, DVec3::new(0.75, 0.0, -0.5), DVec3::new(40.0, 0.0, 30.0)] {
+            for alpha in [0.0f64, 30.0, 60.0, 80.0] {
+                let a = alpha.to_radians();
+                let d = r32(DVec3::new(a.sin() * 0.6, -a.cos(), a.sin() * 0.8));
+                // In f64 by the stable forms.
+                let f = o - c;
+                let b = -f.dot(d);
+                let l = (f + b * d).length();
+                let q = b + ((r - l) * (r + l)).sqrt();
+                let h = (o.length_squared() - 2.0 * o.dot(c)) / (f.length() + c.length()) + 1.5;
+                let truth = h * ((f.length() + r) / q);
+                let name = format!("r = {r:e} from {o} above, {alpha} deg");
+                configs.push((name, c, r, hc, o, d, truth));
+            }
+        }
+    }
+    // Inside a sphere of radius 1e20 (the sky of a scene): every ray meets it at about 1e20.
+    for o in [DVec3::ZERO, DVec3::new(3.0, 4.0, 0.0)] {
+        let (c, r) = (DVec3::ZERO, 1e20);
+        let d = r32(DVec3::new(0.48, 0.6, 0.64));
+        let b = -o.dot(d);
+        let l = (o + b * d).length();
+        let truth = b + ((r - l) * (r + l)).sqrt();
+        let name = format!("inside r = 1e20 from {o}");
+        configs.push((name, c, r, sphere_hc(c, r), o, d, truth));
+    }
+    let recs: Vec<Record> = configs
+        .iter()
+        .map(|(_, c, r, hc, o, d, _)| {
+            record(
+                v4(*c, *r),
+                v4(*o, 0.0),
+                v4(*d, 0.0),
+                *hc,
+                DVec3::ZERO,
+                CASE_RAY_SPHERE,
+            )
+        })
+        .collect();
+    let out = run(&ctx, &recs);
+    let mut worst = 0.0f64;
+    for ((name, c, r, _, o, d, truth), out) in configs.iter().zip(&out) {
+        let t = f64::from(out[0][0]);
+        let naive = ray_sphere_naive_f32(*c, *r, *o, *d);
+        let err = rel(t, *truth);
+        eprintln!("{name}: t = {t:.7e}, truth {truth:.7e}, relative error {err:.2e} (naive f32: {naive:.4e})");
+        assert!(t.is_finite(), "{name}: no hit (t = {t}, truth {truth})");
+        worst = worst.max(err);
+    }
+    // The inputs' own rounding to float32 (direction 6e-8, centre and radius 6e-8 of r, the
+    // latter cancelling in h) bounds the error at a few 1e-7 times the condition, < 6 here.
+    assert!(worst < 1e-5, "worst relative error {worst:.2e}");
     assert_no_validation_messages(&ctx);
 }
 

@@ -257,7 +257,7 @@ struct GpuInstance {
 struct GpuShape {
     vec4 p0;   // sphere: centre, radius; rect: centre; disk: centre, radius
     vec4 p1;   // rect: full edge u; disk: unit normal; sphere: unit pole (SHAPE_FLAG_POLE)
-    vec4 p2;   // rect: full edge v; disk: unit tangent
+    vec4 p2;   // rect: full edge v; disk: unit tangent; sphere: |c| - r, |c| (double precision, shapes.glsl)
     uint kind;       // SHAPE_*
     uint material;   // NONE for light shapes
     uint light;      // index of the light it is the surface of, or NONE
@@ -296,7 +296,7 @@ struct GpuLight {
     vec3 p1;   // rect: full edge u; disk: unit normal; sun: x = 1 - cos(theta_max) (stable)
                // triangle: edge v1 - v0
     uint triangle;   // LIGHT_TRIANGLE: the triangle's index within its mesh (0 otherwise)
-    vec4 p2;   // rect: full edge v; disk: unit tangent; triangle: edge v2 - v0 (normal: normalize(p1 x p2))
+    vec4 p2;   // rect: full edge v; disk: unit tangent; sphere: |c| - r, |c| (double precision, shapes.glsl); triangle: edge v2 - v0 (normal: normalize(p1 x p2))
     vec3 radiance;   // color * intensity * 2^exposure (sun: irradiance at normal incidence;
                      // emissive geometry: the material's emission)
     uint kind;       // LIGHT_*

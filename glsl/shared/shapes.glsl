@@ -2,17 +2,37 @@
 #ifndef ILLUM_SHAPES_GLSL
 #define ILLUM_SHAPES_GLSL
 
-// Precise ray/sphere (Haines et al. 2019, Ray Tracing Gems ch. 7; TECHNIQUES.md 7.4): the
-// discriminant from the centre-to-line vector, not b^2 - 4ac, and the product-of-roots form.
-float intersect_sphere(vec3 c, float r, vec3 o, vec3 d, float tmin, float tmax) {
+// |v| without overflow or underflow of the squares (a sphere may be 1e30 across).
+float safe_length(vec3 v) {
+    float m = max(max(abs(v.x), abs(v.y)), abs(v.z));
+    return m > 0.0 ? m * length(v / m) : 0.0;
+}
+
+// Precise ray/sphere (Haines et al. 2019, Ray Tracing Gems ch. 7; docs/techniques.md, "Ray and
+// sphere"): the discriminant from the centre-to-line vector l, not b^2 - 4ac, and the near root
+// from the product of the roots, c = |f|^2 - r^2 = h (|f| + r) with h = |o - c| - r the signed
+// distance of the origin to the surface. h comes from the host's double-precision h0 = |c| - r
+// and |c| (hc, for the frame's origin, where camera rays start) and the exact identity
+// |o - c| - |c| = o . (o - 2c) / (|o - c| + |c|), so that it keeps the precision of o, not of
+// the sphere's size: a camera 1.5 above a sphere of radius 1e8 gets h = 1.5, where f.f - r^2
+// rounds to a multiple of 1e9. No intermediate exceeds O(r) (r^2 overflows from 1.8e19).
+// The signed distance |o - c| - r of o to a sphere, with |o - c| = fl (see intersect_sphere).
+float sphere_distance(vec3 c, vec2 hc, vec3 o, float fl) {
+    float den = fl + hc.y;
+    return hc.x + (den > 0.0 ? dot(o, (o - 2.0 * c) / den) : 0.0);
+}
+
+float intersect_sphere(vec3 c, float r, vec2 hc, vec3 o, vec3 d, float tmin, float tmax) {
     vec3 f = o - c;
+    float fl = safe_length(f);
+    float h = sphere_distance(c, hc, o, fl);
     float b = -dot(f, d);
-    vec3 l = f + b * d;
-    float disc = (r - length(l)) * (r + length(l));
-    if (disc < 0.0) return INF;
-    float q = b + (b >= 0.0 ? 1.0 : -1.0) * sqrt(disc);
+    float ll = safe_length(f + b * d);
+    if (ll > r) return INF;
+    float root = sqrt(r - ll) * sqrt(r + ll);
+    float q = b + (b >= 0.0 ? root : -root);
     if (q == 0.0) return INF;
-    float t0 = (dot(f, f) - r * r) / q;
+    float t0 = h * ((fl + r) / q);
     float t1 = q;
     float lo = min(t0, t1), hi = max(t0, t1);
     if (lo > tmin && lo < tmax) return lo;
@@ -46,7 +66,7 @@ float intersect_disk(vec3 c, vec3 n, float r, vec3 o, vec3 d, float tmin, float 
 
 float intersect_shape(GpuShape s, vec3 o, vec3 d, float tmin, float tmax) {
     vec2 uv;
-    if (s.kind == SHAPE_SPHERE) return intersect_sphere(s.p0.xyz, s.p0.w, o, d, tmin, tmax);
+    if (s.kind == SHAPE_SPHERE) return intersect_sphere(s.p0.xyz, s.p0.w, s.p2.xy, o, d, tmin, tmax);
     if (s.kind == SHAPE_RECT) return intersect_rect(s.p0.xyz, s.p1.xyz, s.p2.xyz, o, d, tmin, tmax, uv);
     return intersect_disk(s.p0.xyz, s.p1.xyz, s.p0.w, o, d, tmin, tmax);
 }

@@ -62,9 +62,13 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
         GpuShape sh = get_shape(h.prim);
         s.p = o + h.t * d;
         if (sh.kind == SHAPE_SPHERE) {
-            s.ng = normalize(s.p - sh.p0.xyz);
-            // Project onto the sphere so that offsets start from the true surface.
-            s.p = sh.p0.xyz + sh.p0.w * s.ng;
+            vec3 f = s.p - sh.p0.xyz;
+            float fl = safe_length(f);
+            s.ng = f / fl;
+            // Move onto the sphere along the normal, so that offsets start from the true surface:
+            // by the precise signed distance, not to c + r n, which rounds to ulp(|c|) (a unit
+            // at r = 1e7, below the ground sphere's surface).
+            s.p -= sphere_distance(sh.p0.xyz, sh.p2.xy, s.p, fl) * s.ng;
             s.uv = direction_to_latlong(s.ng, vec2(1.0, 0.0));
             // Tangent along the latitudes about the pole: Mitsuba's and pbrt's dp/du.
             if ((sh.flags & SHAPE_FLAG_POLE) != 0u) s.tangent = cross(sh.p1.xyz, s.ng);

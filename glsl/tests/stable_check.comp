@@ -6,8 +6,8 @@
 //   r1 = (sample wi, light_hit(w).t).
 // * Case 1, rect solid angle: a = p, b = corner, c = edge x, d = edge y.
 //   r0.x = rect_solid_angle(p, corner, ex, ey).
-// * Case 2, ray/sphere: a = (centre, radius), b = origin, c = direction.
-//   r0.x = intersect_sphere(centre, radius, o, d, 0, INF).
+// * Case 2, ray/sphere: a = (centre, radius), b = origin, c = direction, d.xy = (|c| - r, |c|)
+//   in double precision. r0.x = intersect_sphere(centre, radius, d.xy, o, d, 0, INF).
 // * Case 3, offset from a rect: a = (p, side), b = rect centre, c = edge u, d = edge v, e.xyz = ray
 //   direction. ng = side * normalize(u x v); o = offset_ray_origin(p, ng).
 //   r0 = (o, intersect_rect(centre, u, v, o, dir, 0, INF)), r1 = (ng, 0).
@@ -57,7 +57,7 @@ void main() {
     } else if (kind == 1u) {
         res.r0.x = rect_solid_angle(q.a.xyz, q.b.xyz, q.c.xyz, q.d.xyz);
     } else if (kind == 2u) {
-        res.r0.x = intersect_sphere(q.a.xyz, q.a.w, q.b.xyz, q.c.xyz, 0.0, INF);
+        res.r0.x = intersect_sphere(q.a.xyz, q.a.w, q.d.xy, q.b.xyz, q.c.xyz, 0.0, INF);
     } else if (kind == 3u) {
         vec3 ng = q.a.w * normalize(cross(q.c.xyz, q.d.xyz));
         vec3 o = offset_ray_origin(q.a.xyz, ng);

@@ -160,7 +160,14 @@ fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
             light_feature: FEATURE_SPHERE_LIGHTS,
             p0: v4(center - origin, radius),
             p1: [0.0; 3],
-            p2: [0.0; 4],
+            // The origin's signed distance to the surface and to the centre, in double precision:
+            // intersect_sphere's exact start (glsl/shared/shapes.glsl).
+            p2: [
+                ((center - origin).length() - radius) as f32,
+                (center - origin).length() as f32,
+                0.0,
+                0.0,
+            ],
             area: (4.0 * PI * radius * radius) as f32,
         },
         ShapeGeometry::Rect { center, u, v } => Encoded {

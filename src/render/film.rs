@@ -12,8 +12,9 @@
 //! - At each block's end its sums leave the device and are added here in fixed point (i128):
 //!   integer addition is associative, so the total does not depend on the order in which blocks
 //!   or jobs are added. The unit is 2^-64 (every float32 from 5e-13 up is exact in it; the range
-//!   reaches 9e18, radiance 1e8 over 2^36 samples), and 2^-24 for the sums of squares (range
-//!   1e31: squared radiance 1e8 over 2^46 samples). Each block sum is rounded to it once,
+//!   reaches 9e18, radiance 1e8 over 2^36 samples), and 2^-24 for the sums of squares and of hit
+//!   distances (range 1e31: squared radiance 1e8 over 2^46 samples, a distance of 1e20 over
+//!   2^36). Each block sum is rounded to it once,
 //!   deterministically; sums saturate rather than wrap.
 //! - A job whose sample range starts or ends inside a block renders that whole block (so that its
 //!   float32 sums are the ones a render in one piece makes) and keeps it apart as a
@@ -36,10 +37,18 @@ pub fn channels(aov_planes: usize) -> usize {
     FILM_CHANNELS + AOV_CHANNELS * aov_planes
 }
 
-/// Fixed-point unit of channel c's exact sums: 2^-fixed_bits(c) (the squares, FilmPixel's
-/// beauty_sq.rgb, get a coarser unit for their range; AOV planes have the beauty's).
+/// FilmPixel's normal.w, the sum of hit distances.
+const DEPTH_SUM: usize = 15;
+
+/// Fixed-point unit of channel c's exact sums: 2^-fixed_bits(c). The squares (FilmPixel's
+/// beauty_sq.rgb) and the hit distances get a coarser unit for their range (a camera inside a
+/// sphere of radius 1e20 sums distances of 1e20); AOV planes have the beauty's.
 pub fn fixed_bits(c: usize) -> i32 {
-    if (4..7).contains(&c) { 24 } else { 64 }
+    if (4..7).contains(&c) || c == DEPTH_SUM {
+        24
+    } else {
+        64
+    }
 }
 
 /// Why `names` cannot be a film's AOV planes, if they cannot: each is a layer name of the final
@@ -389,6 +398,7 @@ mod tests {
         assert_eq!(channels(0), 24);
         assert_eq!(channels(3), 36);
         assert_eq!(fixed_bits(30), 64);
+        assert_eq!(fixed_bits(DEPTH_SUM), 24);
     }
 
     #[test]

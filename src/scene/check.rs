@@ -7,6 +7,12 @@ use glam::{DVec3, Vec3};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
+/// The largest coordinate or size a scene may hold: the device stores geometry in float32
+/// relative to the camera, and bounds add a centre to an extent, so both must stay well inside
+/// float32's range (3.4e38).
+pub const MAX_COORDINATE: f64 = 1e30;
+const TOO_LARGE: &str = "must be at most 1e30 in magnitude (geometry is float32 on the device)";
+
 /// Which file is being checked; all helpers take the field path of the value they check.
 #[derive(Clone, Copy)]
 pub(crate) struct Ctx<'a> {
@@ -31,8 +37,10 @@ impl Ctx<'_> {
         if zero_ok && v == 0.0 {
             return Ok(0.0);
         }
-        if v.is_finite() && v > 0.0 {
+        if v.is_finite() && v > 0.0 && v <= MAX_COORDINATE {
             Ok(v)
+        } else if v > MAX_COORDINATE {
+            Err(self.err(field, fmt_num(v), TOO_LARGE))
         } else if zero_ok {
             Err(self.err(field, fmt_num(v), "must be a finite number >= 0"))
         } else {
@@ -61,10 +69,12 @@ impl Ctx<'_> {
 
     pub fn point(&self, field: &str, v: V3) -> Result<DVec3> {
         let p = DVec3::from_array(v);
-        if p.is_finite() {
-            Ok(p)
-        } else {
+        if !p.is_finite() {
             Err(self.err(field, fmt_vec(&v), "must be finite"))
+        } else if p.abs().max_element() > MAX_COORDINATE {
+            Err(self.err(field, fmt_vec(&v), TOO_LARGE))
+        } else {
+            Ok(p)
         }
     }
 
