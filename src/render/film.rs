@@ -27,6 +27,9 @@ use crate::vk::{Buffer, Context};
 
 /// Samples per block of the film grid (and the most one invocation takes per dispatch).
 pub const FILM_BLOCK: u32 = 256;
+/// The most samples per pixel an image may have: sample indices are 32-bit, and the end of the
+/// last block, a multiple of [`FILM_BLOCK`], must be one too (2^32 - 256).
+pub const MAX_SPP: u32 = u32::MAX - (FILM_BLOCK - 1);
 /// Floats per pixel in the device film (FilmPixel).
 pub const FILM_CHANNELS: usize = 24;
 /// Floats per AOV plane and pixel (a vec4 of the "aovs" buffer: rgb sums, w unused).
@@ -303,9 +306,10 @@ pub fn resolve(
             rgb: vec![[0.0; 3]; film.pixel_count()],
         })
         .collect();
-    let n = f64::from(spp);
-    let n_even = f64::from(spp.div_ceil(2));
-    let n_odd = f64::from(spp / 2);
+    // A film of no samples resolves to zeros, never to NaN.
+    let n = f64::from(spp.max(1));
+    let n_even = f64::from(spp.div_ceil(2).max(1));
+    let n_odd = f64::from((spp / 2).max(1));
     let mut variance = vec![[0.0f32; 3]; film.pixel_count()];
     let mut even = vec![[0.0f32; 3]; film.pixel_count()];
     let mut odd = vec![[0.0f32; 3]; film.pixel_count()];

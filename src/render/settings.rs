@@ -268,6 +268,14 @@ impl RenderSettings {
                 "samples per pixel must be at least 1".into(),
             ));
         }
+        if self.spp > super::film::MAX_SPP {
+            return Err(Error::Invalid(format!(
+                "samples per pixel must be at most {} (32-bit sample indices in blocks of {}), got {}",
+                super::film::MAX_SPP,
+                super::film::FILM_BLOCK,
+                self.spp
+            )));
+        }
         if let Some(t) = self.time
             && !(t.is_finite() && t > 0.0)
         {
