@@ -82,6 +82,11 @@ pub struct BuildParams {
     pub traversal_cost: f32,
     /// Depth from which splits are object medians, so that the depth stays bounded.
     pub median_depth: u32,
+    /// Most levels of the binary tree: a node whose primitives would not fit below it in
+    /// balanced (object-median) splits takes one, so that no input, however degenerate (a
+    /// million identical triangles), builds a deeper tree. At least the depth of a balanced
+    /// tree, [`balanced_depth`].
+    pub max_depth: u32,
     /// Threads the build may use.
     pub threads: usize,
 }
@@ -92,6 +97,7 @@ impl Default for BuildParams {
             max_leaf: 8,
             traversal_cost: 1.0,
             median_depth: 40,
+            max_depth: u32::MAX,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
         }
     }
@@ -325,6 +331,19 @@ fn median_split(refs: &mut [PrimRef], cb: &Aabb) -> usize {
     mid
 }
 
+/// Levels of inner nodes a tree of object-median splits needs over `n` primitives with leaves
+/// of at most `max_leaf`: the least d with ceil(n / 2^d) <= max_leaf (median splits halve, the
+/// larger half rounding up).
+pub fn balanced_depth(n: usize, max_leaf: usize) -> u32 {
+    let mut d = 0;
+    let mut m = n;
+    while m > max_leaf.max(1) {
+        m = m.div_ceil(2);
+        d += 1;
+    }
+    d
+}
+
 /// An object-median split with both sides' boxes.
 fn median(refs: &mut [PrimRef], cb: &Aabb) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
     let nl = median_split(refs, cb);
@@ -388,12 +407,15 @@ fn build_rec(
         b: 0,
         count: n as u32,
     };
-    if n == 1 || (n <= p.max_leaf && depth >= p.median_depth) {
+    // Object medians from here if the depth budget only leaves room for a balanced subtree.
+    let medians =
+        depth >= p.median_depth || depth.saturating_add(balanced_depth(n, p.max_leaf)) >= p.max_depth;
+    if n == 1 || (n <= p.max_leaf && medians) {
         out.push(leaf);
         return index;
     }
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
-    let (nl, left, right) = if depth >= p.median_depth {
+    let (nl, left, right) = if medians {
         median(refs, &cb)
     } else if n <= SWEEP {
         // Few primitives: every split between sorted centroids, cheaper than binning.

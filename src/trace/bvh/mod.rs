@@ -97,7 +97,7 @@ fn params(threads: usize) -> BuildParams {
     }
 }
 
-fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize) -> MeshBvh {
+fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize, slack: Option<u32>) -> MeshBvh {
     let m = scene.meshes[mesh];
     let pos = &scene.positions[m.first_vertex as usize..(m.first_vertex + m.vertex_count) as usize];
     let idx =
@@ -107,9 +107,17 @@ fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize) -> MeshBvh {
     let boxes: Vec<Aabb> = (0..m.triangle_count as usize)
         .map(|t| Aabb::from_points(&corners(t)))
         .collect();
-    let bin = builder::build(&boxes, &params(threads));
+    let base = params(threads);
+    let max_depth = slack.map_or(u32::MAX, |k| {
+        builder::balanced_depth(boxes.len(), base.max_leaf).saturating_add(k)
+    });
+    let bin = builder::build(&boxes, &BuildParams { max_depth, ..base });
     let mut nodes = Vec::new();
-    let (root, need) = nodes::collapse(&bin, &mut nodes, &|_, _| 0);
+    let open = match slack {
+        None => nodes::Open::LargestArea,
+        Some(_) => nodes::Open::Shallowest,
+    };
+    let (root, need) = nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open);
     let triangles = bin
         .order
         .iter()
@@ -148,7 +156,7 @@ fn build_meshes(scene: &GpuScene, threads: usize) -> Vec<MeshBvh> {
     let (large, small): (Vec<usize>, Vec<usize>) =
         (0..n).partition(|&i| scene.meshes[i].triangle_count as usize >= LARGE_MESH);
     for &i in &large {
-        *slots[i].lock().unwrap() = Some(build_mesh(scene, i, threads));
+        *slots[i].lock().unwrap() = Some(build_mesh(scene, i, threads, None));
     }
     let next = AtomicUsize::new(0);
     std::thread::scope(|s| {
@@ -157,7 +165,7 @@ fn build_meshes(scene: &GpuScene, threads: usize) -> Vec<MeshBvh> {
                 loop {
                     let k = next.fetch_add(1, Ordering::Relaxed);
                     let Some(&i) = small.get(k) else { break };
-                    let b = build_mesh(scene, i, 1);
+                    let b = build_mesh(scene, i, 1, None);
                     *slots[i].lock().unwrap() = Some(b);
                 }
             });
@@ -214,7 +222,23 @@ fn inverse_rows(rows: &[[f32; 4]; 3]) -> Option<[[f32; 4]; 3]> {
 pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let t0 = Instant::now();
-    let meshes = build_meshes(scene, threads);
+    let mut meshes = build_meshes(scene, threads);
+    // A walk must fit the kernels' stack (BVH_STACK_SIZE). SAH trees of degenerate inputs (a
+    // million random or identical triangles) can be deeper: their meshes are built again with a
+    // binary depth of at most `slack` levels past a balanced tree, then balanced outright, which
+    // fits any mesh the BVH can hold: 22 levels for 2^24 triangles, collapsed two levels a wide
+    // node (nodes::Open::Shallowest), a walk of at most 33 entries.
+    let top_reserve = top_level_need(scene);
+    for slack in [8, 0] {
+        if meshes.iter().all(|m| m.need + top_reserve <= BVH_STACK_SIZE) {
+            break;
+        }
+        for (i, m) in meshes.iter_mut().enumerate() {
+            if m.need + top_reserve > BVH_STACK_SIZE {
+                *m = build_mesh(scene, i, threads, Some(slack));
+            }
+        }
+    }
     let blas_seconds = t0.elapsed().as_secs_f64();
 
     // Concatenate the bottom levels.
@@ -309,6 +333,15 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
     })
 }
 
+/// A bound on the stack a walk of the top level takes before it enters an instance: the top
+/// level's own levels over all its items (a balanced bound, 3 entries per 4-wide level, doubled
+/// for SAH's imbalance, at least 4) and the entry marking the instance.
+fn top_level_need(scene: &GpuScene) -> u32 {
+    let items = scene.instances.len() + scene.shapes.len();
+    let wide_levels = builder::balanced_depth(items, 1).div_ceil(2);
+    (2 * 3 * wide_levels).max(4) + 1
+}
+
 /// What the top level needs of one mesh's bottom level.
 struct Bottom {
     /// Root link, offset into the shared node array.
@@ -380,7 +413,10 @@ fn top_level(
         .collect();
     if need > BVH_STACK_SIZE {
         return Err(Error::Invalid(format!(
-            "the compute BVH is too deep: a walk may need {need} stack entries, the kernels have {BVH_STACK_SIZE}"
+            "the compute BVH is too deep: a walk may need {need} stack entries, the kernels have \
+             {BVH_STACK_SIZE}, even with every mesh balanced ({} instances and shapes in its top \
+             level); --trace rayquery traces it where the device has ray queries",
+            items.len()
         )));
     }
     Ok((
@@ -412,5 +448,89 @@ impl BvhScene {
         self.stats.max_stack = self.stats.max_stack.max(need);
         ctx.count_builds(0, 1);
         Ok(t.elapsed().as_secs_f64())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stack a walk of a mesh's tree needs, built from `boxes` with `slack` (build_mesh).
+    fn need(boxes: &[Aabb], slack: Option<u32>) -> (u32, u32) {
+        let base = params(2);
+        let max_depth = slack.map_or(u32::MAX, |k| {
+            builder::balanced_depth(boxes.len(), base.max_leaf).saturating_add(k)
+        });
+        let bin = builder::build(boxes, &BuildParams { max_depth, ..base });
+        let depth = binary_depth(&bin, 0);
+        let mut nodes = Vec::new();
+        let open = match slack {
+            None => nodes::Open::LargestArea,
+            Some(_) => nodes::Open::Shallowest,
+        };
+        (nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open).1, depth)
+    }
+
+    fn binary_depth(bin: &builder::BinaryBvh, i: u32) -> u32 {
+        let n = &bin.nodes[i as usize];
+        if n.count > 0 {
+            0
+        } else {
+            1 + binary_depth(bin, n.a).max(binary_depth(bin, n.b))
+        }
+    }
+
+    /// Triangles with three uniformly random corners in a cube: boxes that overlap everywhere,
+    /// the input that drove SAH trees past the kernels' stack.
+    fn random_triangles(n: usize) -> Vec<Aabb> {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..n)
+            .map(|_| {
+                let p: [Vec3A; 3] = std::array::from_fn(|_| Vec3A::new(next(), next(), next()));
+                Aabb::from_points(&p)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn balanced_depth_is_the_median_trees_depth() {
+        assert_eq!(builder::balanced_depth(0, 4), 0);
+        assert_eq!(builder::balanced_depth(4, 4), 0);
+        assert_eq!(builder::balanced_depth(5, 4), 1);
+        assert_eq!(builder::balanced_depth(1 << 20, 4), 18);
+        assert_eq!(builder::balanced_depth((1 << 20) + 1, 4), 19);
+        for n in [1usize, 5, 17, 1000, 4097] {
+            let boxes = random_triangles(n);
+            assert!(need(&boxes, Some(0)).1 <= builder::balanced_depth(n, 4), "{n}");
+        }
+    }
+
+    /// Degenerate meshes: the depth bound holds by construction, and a balanced tree of any mesh
+    /// the BVH can hold fits the kernels' stack with room for the top level.
+    #[test]
+    fn degenerate_meshes_fit_the_stack() {
+        let same = vec![random_triangles(1)[0]; 300_000];
+        for (name, boxes) in [("random", random_triangles(300_000)), ("identical", same)] {
+            let (sah, sah_depth) = need(&boxes, None);
+            let bound = builder::balanced_depth(boxes.len(), 4);
+            for slack in [8, 0] {
+                let (n, depth) = need(&boxes, Some(slack));
+                eprintln!(
+                    "{name}: SAH need {sah} (depth {sah_depth}); slack {slack}: need {n}, depth {depth} (bound {})",
+                    bound + slack
+                );
+                assert!(depth <= bound + slack, "{name}, slack {slack}: depth {depth}");
+                assert!(n <= 3 * depth.div_ceil(2), "{name}, slack {slack}: need {n}");
+            }
+        }
+        // 2^24 triangles balanced: 22 binary levels, 11 wide ones of at most 3 pushes each.
+        let widest = 3 * builder::balanced_depth(1 << 24, 4).div_ceil(2);
+        assert!(widest + 8 <= BVH_STACK_SIZE, "{widest}");
     }
 }

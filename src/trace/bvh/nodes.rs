@@ -95,10 +95,31 @@ pub fn collapse(
     nodes: &mut Vec<BvhNode>,
     leaf_need: &dyn Fn(u32, u32) -> u32,
 ) -> (u32, u32) {
+    collapse_as(bin, nodes, leaf_need, Open::LargestArea)
+}
+
+/// Which inner child a wide node opens next.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub enum Open {
+    /// The largest by surface area (Wald et al. 2008): the fewest node visits.
+    LargestArea,
+    /// The shallowest, then the largest: every wide node spans two binary levels on every path
+    /// that goes on, so a walk of a binary tree of depth D needs at most 3 ceil(D / 2) entries.
+    /// (By area, a path can take 3 entries per binary level where children are alike.)
+    Shallowest,
+}
+
+/// [`collapse`], opening children as `open` says.
+pub fn collapse_as(
+    bin: &BinaryBvh,
+    nodes: &mut Vec<BvhNode>,
+    leaf_need: &dyn Fn(u32, u32) -> u32,
+    open: Open,
+) -> (u32, u32) {
     if bin.nodes.is_empty() {
         return (NONE, 0);
     }
-    collapse_node(bin, 0, nodes, leaf_need)
+    collapse_node(bin, 0, nodes, leaf_need, open)
 }
 
 fn collapse_node(
@@ -106,33 +127,37 @@ fn collapse_node(
     i: u32,
     nodes: &mut Vec<BvhNode>,
     leaf_need: &dyn Fn(u32, u32) -> u32,
+    open: Open,
 ) -> (u32, u32) {
     let n = &bin.nodes[i as usize];
     if n.count > 0 {
         return (leaf_link(n.a, n.count), leaf_need(n.a, n.count));
     }
-    // Open the largest inner child until the node has WIDTH children (Wald et al. 2008).
-    let mut children = vec![n.a, n.b];
+    // Open an inner child until the node has WIDTH children: (binary node, levels below n).
+    let mut children = vec![(n.a, 1u32), (n.b, 1)];
     while children.len() < WIDTH {
-        let Some((k, _)) = children
+        let inner = children
             .iter()
             .enumerate()
-            .filter(|&(_, &c)| bin.nodes[c as usize].count == 0)
-            .map(|(k, &c)| (k, bin.nodes[c as usize].bounds.half_area()))
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-        else {
+            .filter(|&(_, &(c, _))| bin.nodes[c as usize].count == 0)
+            .map(|(k, &(c, level))| (k, level, bin.nodes[c as usize].bounds.half_area()));
+        let pick = match open {
+            Open::LargestArea => inner.max_by(|a, b| a.2.total_cmp(&b.2)),
+            Open::Shallowest => inner.max_by(|a, b| b.1.cmp(&a.1).then(a.2.total_cmp(&b.2))),
+        };
+        let Some((k, level, _)) = pick else {
             break;
         };
-        let c = bin.nodes[children[k] as usize];
-        children[k] = c.a;
-        children.insert(k + 1, c.b);
+        let c = bin.nodes[children[k].0 as usize];
+        children[k] = (c.a, level + 1);
+        children.insert(k + 1, (c.b, level + 1));
     }
     let index = nodes.len();
     nodes.push(BvhNode::default());
     let mut quantized = Vec::with_capacity(children.len());
     let mut need = 0;
-    for &c in &children {
-        let (link, child_need) = collapse_node(bin, c, nodes, leaf_need);
+    for &(c, _) in &children {
+        let (link, child_need) = collapse_node(bin, c, nodes, leaf_need, open);
         need = need.max(child_need);
         quantized.push((bin.nodes[c as usize].bounds, link));
     }
