@@ -53,12 +53,18 @@ fn huge_spheres_are_hit_where_they_are() {
         let out = render_with(&ctx, &scene(&json), 64, 0);
         // The centre pixel spans 2.2 degrees about straight down: depth 1.5 to 1.5 (1 + 3e-4).
         let z = f64::from(out.film.depth[4 * 9 + 4]);
-        assert!((z - 1.5).abs() < 1.5e-3, "R = {r:e}: depth {z}, expected 1.5");
+        assert!(
+            (z - 1.5).abs() < 1.5e-3,
+            "R = {r:e}: depth {z}, expected 1.5"
+        );
         // Lit by the sky above: half the albedo (Lambert under a unit dome), not the dome seen
         // through the ground.
         let b = out.film.beauty[4 * 9 + 4];
         eprintln!("R = {r:e}: depth {z}, beauty {b:?}");
-        assert!((f64::from(b[0]) - 0.5).abs() < 0.05, "R = {r:e}: beauty {b:?}");
+        assert!(
+            (f64::from(b[0]) - 0.5).abs() < 0.05,
+            "R = {r:e}: beauty {b:?}"
+        );
     }
     for r in [1e20, 1e29] {
         let inside = format!(
@@ -76,10 +82,12 @@ fn huge_spheres_are_hit_where_they_are() {
         "materials": {"m": {"diffuse": [0.5, 0.5, 0.5]}},
         "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1e39}, "material": "m"}}}"#;
     let e = illum::scene::from_json_str(big, "big.json", std::path::Path::new("."))
-        .err()
-        .expect("a radius of 1e39 is refused")
+        .expect_err("a radius of 1e39 is refused")
         .to_string();
-    assert!(e.contains("shapes.s.sphere.radius") && e.contains("1e30"), "{e}");
+    assert!(
+        e.contains("shapes.s.sphere.radius") && e.contains("1e30"),
+        "{e}"
+    );
     assert_no_validation_messages(&ctx);
 }
 
