@@ -551,7 +551,11 @@ fn ray_sphere_is_precise_for_huge_spheres() {
     for r in [1e3, 1e6, 1e7, 1e8, 1e12, 1e15, 1e20, 1e29] {
         let c = DVec3::new(0.0, -(r + 1.5), 0.0);
         let hc = [1.5f32, (r + 1.5) as f32, 0.0, 0.0];
-        for o in [DVec3::ZERO, DVec3::new(0.75, 0.0, -0.5), DVec3::new(40.0, 0.0, 30.0)] {
+        for o in [
+            DVec3::ZERO,
+            DVec3::new(0.75, 0.0, -0.5),
+            DVec3::new(40.0, 0.0, 30.0),
+        ] {
             for alpha in [0.0f64, 30.0, 60.0, 80.0] {
                 let a = alpha.to_radians();
                 let d = r32(DVec3::new(a.sin() * 0.6, -a.cos(), a.sin() * 0.8));
@@ -596,7 +600,9 @@ fn ray_sphere_is_precise_for_huge_spheres() {
         let t = f64::from(out[0][0]);
         let naive = ray_sphere_naive_f32(*c, *r, *o, *d);
         let err = rel(t, *truth);
-        eprintln!("{name}: t = {t:.7e}, truth {truth:.7e}, relative error {err:.2e} (naive f32: {naive:.4e})");
+        eprintln!(
+            "{name}: t = {t:.7e}, truth {truth:.7e}, relative error {err:.2e} (naive f32: {naive:.4e})"
+        );
         assert!(t.is_finite(), "{name}: no hit (t = {t}, truth {truth})");
         worst = worst.max(err);
     }

@@ -644,7 +644,14 @@ fn the_compute_bvh_takes_degenerate_meshes() {
         .unwrap_or_else(|e| panic!("the compute BVH refused the mesh: {e}"));
     let z = out.film.depth[4 * 9 + 4];
     assert!((z - 3.0).abs() < 1e-3, "depth {z}");
-    assert!(out.stats.build.max_stack <= BVH_STACK_SIZE, "{}", out.stats.build.max_stack);
-    eprintln!("1.2M identical triangles: walk stack {}", out.stats.build.max_stack);
+    assert!(
+        out.stats.build.max_stack <= BVH_STACK_SIZE,
+        "{}",
+        out.stats.build.max_stack
+    );
+    eprintln!(
+        "1.2M identical triangles: walk stack {}",
+        out.stats.build.max_stack
+    );
     assert_no_validation_messages(&ctx);
 }

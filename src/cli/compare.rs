@@ -174,11 +174,22 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         .iter()
         .map(|r| with_suffix(&format!("{}.exr", r.name)))
         .collect();
-    check_outputs(
-        exrs.iter()
-            .chain([&plot_path, &strip_path])
-            .map(PathBuf::as_path),
-    )?;
+    let outputs: Vec<(&str, &std::path::Path)> = exrs
+        .iter()
+        .map(|p| ("image", p.as_path()))
+        .chain([
+            ("plot", plot_path.as_path()),
+            ("strip", strip_path.as_path()),
+        ])
+        .collect();
+    let inputs: Vec<(&str, &std::path::Path)> = [
+        a.scene.scene.as_deref().map(|p| ("scene", p)),
+        a.reference.as_deref().map(|p| ("reference", p)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    check_outputs(&outputs, &inputs)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a
         .reference
@@ -231,6 +242,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             // An interrupted technique had less time than the others: no fair comparison.
             return Err(Interrupted {
                 signal: signal::received().unwrap_or(libc::SIGINT),
+                wrote: true,
                 kept: format!(
                     "wrote {} ({} spp); no table, curves or strip",
                     exr.display(),

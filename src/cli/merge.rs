@@ -26,12 +26,16 @@ pub struct MergeArgs {
 
 pub fn run(a: &MergeArgs) -> Result<()> {
     let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
-    check_outputs(
-        [Some(&exr_path), png_path.as_ref()]
-            .into_iter()
-            .flatten()
-            .map(PathBuf::as_path),
-    )?;
+    let outputs: Vec<(&str, &std::path::Path)> = [
+        Some(("image", exr_path.as_path())),
+        png_path.as_deref().map(|p| ("PNG", p)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let inputs: Vec<(&str, &std::path::Path)> =
+        a.parts.iter().map(|p| ("part", p.as_path())).collect();
+    check_outputs(&outputs, &inputs)?;
     let start = Instant::now();
     // Headers first (a mismatch fails before any data is read), then one part at a time.
     let m = merge_files(&a.parts)?;

@@ -41,7 +41,9 @@ pub enum Command {
 }
 
 /// Runs a command, prints its error if any, and returns the process exit status: 0, 1 for an
-/// error, 128 + the signal number (130 for Ctrl-C) when a signal interrupted a render.
+/// error (nothing, or not everything, was written), 128 + the signal number (130 for Ctrl-C,
+/// 143 for SIGTERM) when a signal interrupted a render and the image of the samples done so far
+/// was written; an interrupted part job writes nothing and exits 1.
 pub fn run(command: Command) -> i32 {
     let result = match command {
         Command::Render(a) => render::run(&a),
@@ -57,7 +59,7 @@ pub fn run(command: Command) -> i32 {
         Err(e) => match e.downcast_ref::<Interrupted>() {
             Some(i) => {
                 eprintln!("illum: {i}");
-                128 + i.signal
+                if i.wrote { 128 + i.signal } else { 1 }
             }
             None => {
                 eprintln!("illum: error: {e:#}");
@@ -67,10 +69,12 @@ pub fn run(command: Command) -> i32 {
     }
 }
 
-/// A render stopped by SIGINT or SIGTERM, after writing what it had.
+/// A render stopped by SIGINT or SIGTERM.
 #[derive(Debug)]
 pub struct Interrupted {
     pub signal: i32,
+    /// Whether the image of the samples done so far was written (the exit status says so).
+    pub wrote: bool,
     /// What was kept, e.g. "wrote out.exr with 12 of 64 samples per pixel".
     pub kept: String,
 }
@@ -211,11 +215,14 @@ impl IntegratorArgs {
     }
 }
 
-/// Checks every output path before any work (see [`crate::output::check_writable`]).
-pub fn check_outputs<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Result<()> {
-    for p in paths {
+/// Checks every output path before any work (see [`crate::output::check_writable`]), and that no
+/// output would replace an input or another output. Each path comes with what it is ("image",
+/// "report", "scene", "reference", ...), for the error.
+pub fn check_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<()> {
+    for (_, p) in outputs {
         crate::output::check_writable(p)?;
     }
+    crate::output::check_distinct(outputs, inputs)?;
     Ok(())
 }
 

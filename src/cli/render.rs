@@ -7,7 +7,7 @@ use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -95,6 +95,19 @@ fn parse_range(s: &str) -> std::result::Result<(u32, u32), String> {
     Ok((n(a)?, n(b)?))
 }
 
+impl RenderArgs {
+    /// The files a render reads, which no output may replace.
+    fn inputs(&self) -> Vec<(&str, &Path)> {
+        [
+            self.scene.scene.as_deref().map(|p| ("scene", p)),
+            self.reference.as_deref().map(|p| ("reference", p)),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+}
+
 fn parse_crop(s: &str) -> std::result::Result<Window, String> {
     let v: Vec<u32> = s
         .split(',')
@@ -114,17 +127,24 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
     // Every path is checked before anything slow (scene loading, device, kernels, rendering).
-    check_outputs(
-        [
-            Some(&exr_path),
-            png_path.as_ref(),
-            a.report.as_ref(),
-            a.report_plot.as_ref(),
-        ]
-        .into_iter()
-        .flatten()
-        .map(PathBuf::as_path),
-    )?;
+    if let Some(p) = &a.report_plot
+        && !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        bail!(
+            "--report-plot {}: the plot is a PNG; name a .png file",
+            p.display()
+        );
+    }
+    let outputs: Vec<(&str, &Path)> = [
+        Some(("image", exr_path.as_path())),
+        png_path.as_deref().map(|p| ("PNG", p)),
+        a.report.as_deref().map(|p| ("report", p)),
+        a.report_plot.as_deref().map(|p| ("plot", p)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    check_outputs(&outputs, &a.inputs())?;
     let scene = a.scene.load()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a
@@ -218,6 +238,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     if s.interrupted {
         return Err(Interrupted {
             signal: signal::received().unwrap_or(libc::SIGINT),
+            wrote: true,
             kept: format!("wrote {written} with {} of {spp} samples per pixel", s.spp),
         }
         .into());
@@ -419,7 +440,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
             bail!("--samples and --crop need --spp: the samples per pixel of the whole image")
         }
     };
-    check_outputs([a.output.as_path()])?;
+    check_outputs(&[("part", a.output.as_path())], &a.inputs())?;
     let scene = a.scene.load()?;
     let (samples, crop, label) = match a.part {
         Some((k, n)) => {
@@ -433,6 +454,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         }
         None => (a.samples, a.crop, String::new()),
     };
+    signal::set_part_job();
     let cancel = signal::install();
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
@@ -480,6 +502,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         // A part is all or nothing: the scheduler reruns an interrupted job.
         return Err(Interrupted {
             signal: signal::received().unwrap_or(libc::SIGINT),
+            wrote: false,
             kept: format!(
                 "wrote nothing: a job is written only when complete ({} samples of its range were done); run it again",
                 out.stats.spp

@@ -12,7 +12,10 @@ mod png;
 
 use std::path::{Path, PathBuf};
 
-pub use file::{check_writable, temp_path_for, write_atomically};
+pub use file::{
+    abort_writes, check_distinct, check_writable, resolve_target, same_file, temp_path_for,
+    write_atomically,
+};
 pub use openexr::{ExrImage, read_exr, read_reference, write_exr};
 pub use png::write_png;
 
@@ -184,6 +187,8 @@ pub enum OutputError {
     },
     #[error("cannot write {}: {reason}", .path.display())]
     NotWritable { path: PathBuf, reason: String },
+    #[error("did not write {}: a second signal asked to quit at once", .path.display())]
+    Aborted { path: PathBuf },
     #[error(
         "reference {} is {width}x{height}, the render {expected_width}x{expected_height}",
         .path.display()

@@ -408,8 +408,8 @@ fn build_rec(
         count: n as u32,
     };
     // Object medians from here if the depth budget only leaves room for a balanced subtree.
-    let medians =
-        depth >= p.median_depth || depth.saturating_add(balanced_depth(n, p.max_leaf)) >= p.max_depth;
+    let medians = depth >= p.median_depth
+        || depth.saturating_add(balanced_depth(n, p.max_leaf)) >= p.max_depth;
     if n == 1 || (n <= p.max_leaf && medians) {
         out.push(leaf);
         return index;

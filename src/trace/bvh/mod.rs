@@ -230,7 +230,10 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
     // node (nodes::Open::Shallowest), a walk of at most 33 entries.
     let top_reserve = top_level_need(scene);
     for slack in [8, 0] {
-        if meshes.iter().all(|m| m.need + top_reserve <= BVH_STACK_SIZE) {
+        if meshes
+            .iter()
+            .all(|m| m.need + top_reserve <= BVH_STACK_SIZE)
+        {
             break;
         }
         for (i, m) in meshes.iter_mut().enumerate() {
@@ -468,7 +471,10 @@ mod tests {
             None => nodes::Open::LargestArea,
             Some(_) => nodes::Open::Shallowest,
         };
-        (nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open).1, depth)
+        (
+            nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open).1,
+            depth,
+        )
     }
 
     fn binary_depth(bin: &builder::BinaryBvh, i: u32) -> u32 {
@@ -507,7 +513,10 @@ mod tests {
         assert_eq!(builder::balanced_depth((1 << 20) + 1, 4), 19);
         for n in [1usize, 5, 17, 1000, 4097] {
             let boxes = random_triangles(n);
-            assert!(need(&boxes, Some(0)).1 <= builder::balanced_depth(n, 4), "{n}");
+            assert!(
+                need(&boxes, Some(0)).1 <= builder::balanced_depth(n, 4),
+                "{n}"
+            );
         }
     }
 
@@ -525,8 +534,14 @@ mod tests {
                     "{name}: SAH need {sah} (depth {sah_depth}); slack {slack}: need {n}, depth {depth} (bound {})",
                     bound + slack
                 );
-                assert!(depth <= bound + slack, "{name}, slack {slack}: depth {depth}");
-                assert!(n <= 3 * depth.div_ceil(2), "{name}, slack {slack}: need {n}");
+                assert!(
+                    depth <= bound + slack,
+                    "{name}, slack {slack}: depth {depth}"
+                );
+                assert!(
+                    n <= 3 * depth.div_ceil(2),
+                    "{name}, slack {slack}: need {n}"
+                );
             }
         }
         // 2^24 triangles balanced: 22 binary levels, 11 wide ones of at most 3 pushes each.
