@@ -2,8 +2,9 @@
 #ifndef ILLUM_SHAPES_GLSL
 #define ILLUM_SHAPES_GLSL
 
-// Precise ray/sphere (Haines et al. 2019, Ray Tracing Gems ch. 7; TECHNIQUES.md 7.4): the
-// discriminant from the centre-to-line vector, not b^2 - 4ac, and the product-of-roots form.
+// Precise ray/sphere (Haines et al. 2019, Ray Tracing Gems ch. 7; docs/techniques.md,
+// "Ray-sphere intersection"): the discriminant from the centre-to-line vector, not b^2 - 4ac, and
+// the product-of-roots form.
 float intersect_sphere(vec3 c, float r, vec3 o, vec3 d, float tmin, float tmax) {
     vec3 f = o - c;
     float b = -dot(f, d);
