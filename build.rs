@@ -3,10 +3,11 @@
 //! (glsl/shared/layout.glsl): its constants (`layout_consts.rs`) and mirrors of its structs
 //! (`layout_structs.rs`), both included by src/layout.rs.
 //!
-//! Every top-level `glsl/*.comp` is a kernel; `glsl/shared/*.glsl` are included pieces. Each kernel is
-//! compiled once per trace backend (`rq`: hardware ray queries, `bvh`: illum's compute BVH) when its
-//! first line says `// illum-variants: rq bvh` (default: one plain variant). Feature switches within a
-//! variant are specialization constants, folded at pipeline creation.
+//! Every `glsl/**/*.comp` is a kernel (its Rust name is its file stem, so stems are unique);
+//! `*.glsl` files are included pieces. Each kernel is compiled once per trace backend (`rq`:
+//! hardware ray queries, `bvh`: illum's compute BVH) when its first line says
+//! `// illum-variants: rq bvh` (default: one plain variant). Feature switches within a variant are
+//! specialization constants, folded at pipeline creation.
 
 use std::env;
 use std::fmt::Write as _;

@@ -1,4 +1,4 @@
-/* Embedding illum in a C application's Vulkan frame (issue 14), the C counterpart of
+/* Embedding illum in a C application's Vulkan frame, the C counterpart of
  * examples/embed.rs: the application creates its own instance and a device with what
  * illum_requirements asks for (embed_host.h), builds a scene in code (a mesh and a texture from
  * its own arrays), and renders 10 progressive passes into its own storage image while orbiting

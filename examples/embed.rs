@@ -1,4 +1,4 @@
-//! Embedding illum in an application's Vulkan frame (issue 14): the application creates its own
+//! Embedding illum in an application's Vulkan frame: the application creates its own
 //! instance and a device with what `illum::vk::requirements` asks for, builds a scene in code,
 //! and renders 10 progressive passes into its own storage image while orbiting the camera (a new
 //! viewpoint every second pass, which restarts the accumulation), recording each pass into its own

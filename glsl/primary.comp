@@ -13,8 +13,8 @@ void main() {
     if (local.x >= pc.tile.z || local.y >= pc.tile.w) return;
     uvec2 pix = local + pc.tile.xy;
     uint pixel = pix.y * frame.width + pix.x;
-    // The film holds float32 sums of at most 256 samples per pixel: the host moves them into
-    // float64 sums (src/render/film.rs), since long float32 running sums round systematically.
+    // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
+    // fixed point (src/render/film.rs), since long float32 running sums round systematically.
     FilmPixel acc = film[pixel];
     for (uint k = 0u; k < pc.sample_count; ++k) {
         uint sample_index = pc.first_sample + k;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""illum against Mitsuba 3 at equal render time (issue 15; docs/performance-sampling.md, "Against Mitsuba 3
+"""illum against Mitsuba 3 at equal render time (docs/performance-sampling.md, "Against Mitsuba 3
 at equal time"). For measurement only: needs the mitsuba package (a venv outside the repo) and a
 release build of illum.
 

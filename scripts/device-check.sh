@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU figures of docs/performance.md ("On an NVIDIA H200", issue 15 item 6) in one run on a
+# The GPU figures of docs/performance-gpu.md (an NVIDIA H200) in one run on a
 # lent device machine: the devices, the trace benchmark, renders under the validation layers, the
 # first image on a cold shader cache, camera samples per second, and illum against Mitsuba 3's
 # cuda_ad_rgb variant at equal time (scripts/compare-mitsuba.py). Beside the tracked files it needs

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates include/illum.h from src/capi.rs with cbindgen (cargo install cbindgen --locked).
+# Regenerates include/illum.h from src/capi/ with cbindgen (cargo install cbindgen --locked).
 # tests/capi.rs compiles a C program against the committed header, so a stale one fails there.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Writes the dome benchmark scenes of issue 15 (docs/performance-sampling.md, "The dome path"):
+"""Writes the dome benchmark scenes (docs/performance-sampling.md, "The dome path"):
 scenes/bench/dome.json (a procedural HDR sky with a small bright sun over diffuse and glossy spheres),
 scenes/bench/rect.json (the same spheres under one rect light, the no-regression check),
-scenes/bench/lights64.json (the same spheres under 32 sphere and 32 rect lights, issue 15's
+scenes/bench/lights64.json (the same spheres under 32 sphere and 32 rect lights, the
 many-light case) and the map scenes/bench/sky.exr (256x128 lat-long, illum's convention). Re-run after editing:
     python3 scripts/make-bench-scenes.py
 """

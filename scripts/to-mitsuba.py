@@ -12,8 +12,8 @@ Mitsuba's convention): render that one with both renderers.
 
 A material (Lambert diffuse + one specular lobe, summed) becomes Mitsuba's blendbsdf at weight 1/2
 of the doubled components, which is their sum; Mitsuba's diffuse and roughconductor do not clamp
-reflectances above 1. Integrator: `direct` with 1 emitter and 1 BSDF sample per camera sample
-(issue 15), `independent` sampler, box reconstruction filter (illum integrates a box pixel).
+reflectances above 1. Integrator: `direct` with 1 emitter and 1 BSDF sample per camera sample,
+`independent` sampler, box reconstruction filter (illum integrates a box pixel).
 
     to-mitsuba.py SCENE.json --spp N -o out.exr      # render (needs the mitsuba package)
     to-mitsuba.py SCENE.json --comparable OUT.json   # the convertible variant (no mitsuba needed)

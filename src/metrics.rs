@@ -1,5 +1,5 @@
-//! Image error metrics (TECHNIQUES.md §8), computed per channel on linear values and averaged over
-//! pixels and channels:
+//! Image error metrics (docs/techniques.md, "Error metrics and the half-buffer estimate"),
+//! computed per channel on linear values and averaged over pixels and channels:
 //!
 //! - MSE = mean (I - R)^2, RMSE = sqrt(MSE), MAE = mean |I - R|;
 //! - relMSE = mean (I - R)^2 / (R^2 + ε) with ε = [`RELMSE_EPSILON`] = 0.01.

@@ -1,6 +1,7 @@
 //! glsl/shared/microfacet.glsl on the GPU (glsl/tests/sample_brdf.comp): chi-square tests of every
 //! sampler against its own pdf, the D-BRDF's weight = F identity, directional albedos against
-//! quadrature references (and TECHNIQUES.md 1.4's tables), Fresnel, the delta lobe and invalid input.
+//! quadrature references (and the tables of docs/techniques.md, "Reference values"), Fresnel, the
+//! delta lobe and invalid input.
 
 mod sampling_support;
 
@@ -457,7 +458,8 @@ fn dbrdf_albedo(a: (f64, f64), v: DVec3) -> f64 {
 enum Smith {
     /// Beckmann, separable, Walter's rational G1 (what microfacet.glsl implements).
     BeckmannWalter,
-    /// Beckmann, separable, exact Lambda with erf (TECHNIQUES 1.4's table).
+    /// Beckmann, separable, exact Lambda with erf (the table of docs/techniques.md,
+    /// "Reference values").
     BeckmannExact,
     GgxCorrelated,
     GgxSeparable,
@@ -580,7 +582,8 @@ const ANGLES: [f64; 4] = [0.0, 45.0, 70.0, 85.0];
 
 #[test]
 fn dbrdf_albedo_matches_quadrature_and_the_course_table() {
-    // TECHNIQUES.md 1.4 (Monte Carlo values, 4e5 samples each, rounded to 1e-3).
+    // docs/techniques.md, "Reference values" (Monte Carlo values, 4e5 samples each, rounded to
+    // 1e-3).
     let table = [
         (0.05, [1.000, 1.000, 1.000, 0.891]),
         (0.2, [1.000, 0.998, 0.889, 0.619]),
@@ -638,8 +641,8 @@ fn dbrdf_albedo_matches_quadrature_and_the_course_table() {
 
 #[test]
 fn beckmann_smith_albedo_matches_quadrature_and_the_table() {
-    // TECHNIQUES.md 1.4: Cook-Torrance Beckmann + separable Smith with the exact (erf) Lambda
-    // (verify/check_brdf.py section 5, "sep"), Monte Carlo with 4e5 samples, rounded to 1e-3.
+    // docs/techniques.md, "Reference values": Cook-Torrance Beckmann + separable Smith with the
+    // exact (erf) Lambda, Monte Carlo with 4e5 samples, rounded to 1e-3.
     let table = [
         (0.2, [1.000, 0.997, 0.933, 0.930]),
         (1.0, [0.462, 0.649, 0.820, 0.904]),

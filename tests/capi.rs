@@ -1,4 +1,4 @@
-//! The C API from C (issue 14): tests/capi/embed_test.c is compiled with `cc` against the
+//! The C API from C: tests/capi/embed_test.c is compiled with `cc` against the
 //! committed include/illum.h and libillum.a (the lib target's staticlib), then run; it checks its
 //! own results and the validation layers' silence, and exits 0 only if all hold.
 
@@ -98,7 +98,7 @@ fn the_c_example_runs() {
     assert_eq!(pfm.len(), header.len() + 12 * 8 * 3 * 4);
 }
 
-/// The committed header is what cbindgen makes of src/capi.rs (where cbindgen is installed:
+/// The committed header is what cbindgen makes of src/capi/ (where cbindgen is installed:
 /// scripts/gen-header.sh; without it, the C program above still compiles against the header).
 #[test]
 fn the_committed_header_is_current() {

@@ -1,4 +1,5 @@
-//! Control variates (glsl/shared/direct.glsl, TECHNIQUES.md §5): `avgvis` and `loo`.
+//! Control variates (glsl/shared/direct.glsl; docs/techniques.md, "Control variates"): `avgvis`
+//! and `loo`.
 //!
 //! * Zero variance: a diffuse plane fully lit by a huge rect, disk, sphere or triangle light, a
 //!   wide sun, or a rect with a uniform texture (the control's mean radiance). Each light

@@ -1,5 +1,6 @@
 //! The bias of the course's average-visibility control variate (`--control-variates avgvis`,
-//! TECHNIQUES.md §5.1): with N i.i.d. light samples, E[I_cv] − I = −Cov(V_i, g_i) / N.
+//! docs/techniques.md, "Control variates"): with N i.i.d. light samples,
+//! E[I_cv] − I = −Cov(V_i, g_i) / N.
 //!
 //! The scene is 1-D-like and computed independently on the host: a floor point p = (1, 0, 0)
 //! (albedo ρ) under an 8 × 8 rect light of radiance L at height 1 (sampled uniformly in solid angle,

@@ -1,4 +1,5 @@
-//! Control variates of the dome (glsl/shared/direct.glsl, TECHNIQUES.md §5.1 rule 2, §5.6): the
+//! Control variates of the dome (glsl/shared/direct.glsl; docs/techniques.md,
+//! "Control variates", condition 2, and "Analytic unshadowed irradiance"): the
 //! control radiance is the map's SH9 projection L_SH (src/gpu_scene/dome_sh.rs), G its SH9
 //! irradiance, and the dome's sampler mixes in a uniform share so that its pdf is positive where
 //! L_SH is not 0 (docs/control-variates.md).

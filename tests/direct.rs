@@ -1,4 +1,5 @@
-//! The direct-lighting integrator against closed forms (TECHNIQUES.md §5) and against itself:
+//! The direct-lighting integrator against closed forms (docs/techniques.md,
+//! "Analytic unshadowed irradiance") and against itself:
 //! a Lambert plane lit by a disk, a sphere and a rect light (exact unshadowed irradiance); an
 //! emissive quad and a rect light of the same radiance give the same image; BRDF sampling, light
 //! sampling and MIS converge to the same image. Every image is BATCHES independent renders, and
@@ -46,7 +47,8 @@ fn check_against(json: &str, irradiance: impl Fn(DVec3) -> f64) {
 
 #[test]
 fn disk_light_matches_the_vector_irradiance_closed_form() {
-    // Disk of radius R at height h facing down, radiance L: §5.5 axial component at distance a.
+    // Disk of radius R at height h facing down, radiance L: the vector irradiance's axial
+    // component at distance a (docs/techniques.md, "Analytic unshadowed irradiance").
     let (h, r, l) = (1.0, 0.5, 4.0);
     check_against(
         &scene_with(
@@ -81,7 +83,8 @@ fn sphere_light_matches_the_cap_irradiance() {
 
 #[test]
 fn rect_light_matches_the_polygon_formula() {
-    // Lambert's polygon formula, E = L sum_k Theta_k (n . Gamma_k) / 2, n = +Y (TECHNIQUES 5.4).
+    // Lambert's polygon formula, E = L sum_k Theta_k (n . Gamma_k) / 2, n = +Y (docs/techniques.md,
+    // "Analytic unshadowed irradiance").
     let l = 3.0;
     let corners = [
         DVec3::new(-0.4, 1.2, -0.3),

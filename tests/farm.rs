@@ -1,4 +1,4 @@
-//! Farm renders (issue 13): `illum render --part K/N [--split samples|tiles]` cuts an image into
+//! Farm renders: `illum render --part K/N [--split samples|tiles]` cuts an image into
 //! N jobs that `illum merge` puts back bit for bit, whatever N: N dividing the blocks or not,
 //! more parts than blocks, tiles. `exr_channels_match` (ignored: run by scripts/test-slurm.sh
 //! on two files named by ILLUM_EXR_A and ILLUM_EXR_B) compares a Slurm render with one process.

@@ -93,7 +93,7 @@ fn sphere_scene(r: f64, dist: f64, emitter: &str) -> String {
     )
 }
 
-/// Issue 16, bug 1: shadow rays ended inside a small emissive sphere when the shading point was
+/// A former bug: shadow rays ended inside a small emissive sphere when the shading point was
 /// far from the camera (−20 % at 20 units, −23 % at 200). An emissive sphere and a sphere light of
 /// the same radiance must both match the closed form over camera distances 1 to 1e4 and sizes
 /// 1e-3 to 10.
@@ -135,7 +135,7 @@ fn emissive_spheres_and_sphere_lights_match_the_closed_form_at_every_distance_an
     assert_no_validation_messages(&ctx);
 }
 
-/// Issue 16, bug 2: a one-sided emissive sphere shell seen from its centre emits nothing inward
+/// A former bug: a one-sided emissive sphere shell seen from its centre emits nothing inward
 /// and so lights nothing inside: every pixel is exactly 0. Two-sided, each inner point sees the
 /// whole shell: L = Le + rho Le exactly, checked as a mean.
 #[test]
@@ -229,7 +229,7 @@ fn hover_shadow_fraction() -> Vec<Option<f64>> {
     out
 }
 
-/// Issue 16, convention 4: lights are opaque objects, like Mitsuba's and pbrt's. A disk light
+/// Convention: lights are opaque objects, like Mitsuba's and pbrt's. A disk light
 /// hovering over a sunlit floor casts the disk's exact shadow (zero variance: a delta sun); with
 /// "shadows": false it casts none; an emissive disk casts the same shadow.
 #[test]
@@ -335,7 +335,7 @@ fn largest_t(a: &Batches, b: &Batches) -> (f64, f64) {
     (worst, dof)
 }
 
-/// Issue 16, convention 7: a sphere's "pole" orients its anisotropic tangents (Mitsuba's and
+/// Convention: a sphere's "pole" orients its anisotropic tangents (Mitsuba's and
 /// pbrt's dp/du, latitudes about the pole). A scene with the pole along +Z must render like the
 /// same scene rotated so that +Z becomes +Y with the default pole (+Y): per pixel, Welch's t of
 /// the two scenes' means over 8 independent renders each stays within the Šidák limit at 1e-3

@@ -1,4 +1,4 @@
-//! Indirect lighting (issue 11): the path tracer and the full integrator (direct lighting, the
+//! Indirect lighting: the path tracer and the full integrator (direct lighting, the
 //! radiosity cache, reflections) against closed forms first (the furnace, an open plane under a
 //! uniform dome), then against each other: the cache against brute force on the interior scene,
 //! full against path where no caustic paths exist, the AOVs against the beauty, split renders
@@ -65,7 +65,7 @@ fn furnace(rho: f64) -> Scene {
     ))
 }
 
-/// The furnace (TECHNIQUES §6.3): Le / (1 - rho) in every pixel. The path tracer is unbiased:
+/// The furnace (docs/techniques.md, "The radiosity cache"): Le / (1 - rho) in every pixel. The path tracer is unbiased:
 /// within statistics (seed scatter). The full integrator's cache is biased by the lag of its
 /// Jacobi iteration, which its warm-up takes below 1e-3 of the indirect light (radiosity.rs):
 /// the limit adds that bound to the statistics.

@@ -1,4 +1,4 @@
-//! Split renders (issue 10): jobs by sample range (aligned to the film's 256-sample blocks or
+//! Split renders: jobs by sample range (aligned to the film's 256-sample blocks or
 //! not) and by pixel window, written as partial EXRs, read back and merged, give the render in
 //! one piece bit for bit, on both trace paths; merging refuses parts that do not belong together,
 //! naming the part and the field.

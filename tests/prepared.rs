@@ -1,4 +1,4 @@
-//! A prepared scene (issue 10): uploaded and built once, rendered many times with other seeds and
+//! A prepared scene: uploaded and built once, rendered many times with other seeds and
 //! a moved camera, re-uploading nothing but the frame constants.
 
 mod common;

@@ -1,6 +1,6 @@
 //! glsl/shared/light_sampling.glsl, irradiance.glsl and mis.glsl on the GPU (glsl/tests/
 //! sample_light.comp, irradiance_check.comp, mis_check.comp), and the dome tables of
-//! src/render/dome.rs: chi-square tests of every light sampler against its own pdf(), pdf
+//! src/gpu_scene/dome.rs: chi-square tests of every light sampler against its own pdf(), pdf
 //! consistency per sample, analytic irradiance against float64 references validated by Monte Carlo
 //! (z-tests), the MIS weights at extreme pdfs, and the camera-sample streams (scrambled Sobol).
 
@@ -1021,7 +1021,7 @@ fn irradiance_matches_references() {
     );
     let z = DVec3::Z;
     let o = DVec3::ZERO;
-    // (name, light, p, n, value from TECHNIQUES.md / verify/OUTPUT.txt if listed there)
+    // (name, light, p, n, value from docs/techniques.md, "Reference values", if listed there)
     let mut cases: Vec<(String, GpuLight, DVec3, DVec3, Option<f64>)> = Vec::new();
     let sphere_table = [
         (3.0, [0.34907, 0.17453, 0.06522, 0.02557, 0.00461]),
@@ -1041,7 +1041,7 @@ fn irradiance_matches_references() {
             ));
         }
     }
-    // Rects of verify/check_lights.py (half-extents 1 x 0.5, tilted about x), oriented to face p.
+    // Rects of "Reference values" (half-extents 1 x 0.5, tilted about x), oriented to face p.
     for ((cx, cy, cz), tilt, value) in [
         ((0.0, 0.0, 2.0), 0.0f64, 0.41584),
         ((1.0, 0.5, 1.0), 30.0, 0.38187),
@@ -1060,7 +1060,7 @@ fn irradiance_matches_references() {
         };
         cases.push((format!("rect at {c} tilt {tilt}°"), l, o, z, Some(value)));
     }
-    // Disks of verify/check_lights.py: disk at the origin facing +z, point at (a, 0, h), normal n.
+    // Disks of "Reference values": disk at the origin facing +z, point at (a, 0, h), normal n.
     for (h, a, r, nrm, value) in [
         (1.0, 0.0, 0.5, DVec3::new(0.0, 0.0, -1.0), 0.62832),
         (1.0, 1.0, 0.5, DVec3::new(0.0, 0.0, -1.0), 0.20696),
@@ -1296,7 +1296,7 @@ fn irradiance_matches_references() {
             "{name}: GPU {got} vs float64 {reference}"
         );
         if let Some(v) = listed {
-            // Printed with 5 decimals in verify/OUTPUT.txt.
+            // Listed with 5 decimals in docs/techniques.md, "Reference values".
             assert!(
                 (reference - v).abs() <= 5.01e-6,
                 "{name}: float64 {reference} vs listed {v}"

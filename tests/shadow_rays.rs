@@ -1,6 +1,7 @@
-//! Fewer shadow rays (glsl/shared/direct.glsl, TECHNIQUES.md §4.2, §4.3): resampled shadow rays
-//! (`shadow_resample`) and Russian roulette on each candidate (`shadow_cull`) against the plain
-//! estimator, on a floor in the penumbra of a sphere under a large rect light.
+//! Fewer shadow rays (glsl/shared/direct.glsl; docs/techniques.md, "Shadow resampling" and
+//! "Shadow culling"): resampled shadow rays (`shadow_resample`) and Russian roulette on each candidate
+//! (`shadow_cull`) against the plain estimator, on a floor in the penumbra of a sphere under a
+//! large rect light.
 //!
 //! * Unbiased: block means (4x4 pixels, luminance) and the image mean of SEEDS independent renders
 //!   per estimator (Renderer::render_prepared with distinct seeds), Welch t-tests with the

@@ -1,16 +1,16 @@
 //! The numerically stable helpers of glsl/shared/ at their extremes (glsl/tests/stable_check.comp),
 //! against float64 references computed here from the same float32 inputs:
 //! * sphere light (light_sampling.glsl sample_sphere / light_pdf): the stable 1 - cos(theta_max)
-//!   through pdf = 1 / (2 pi (1 - cos theta_max)) for r/d from 1e-8 to 0.999 (TECHNIQUES.md 2.2,
-//!   7.2), and the sample distance;
+//!   through pdf = 1 / (2 pi (1 - cos theta_max)) for r/d from 1e-8 to 0.999 (docs/techniques.md,
+//!   "Sphere lights" and "Stable cones and solid angles"), and the sample distance;
 //! * rect_solid_angle (two Van Oosterom–Strackee triangles with the triple product from the
-//!   light's edges, 2.1) for tiny, far, huge and oblique rects;
-//! * intersect_sphere (shapes.glsl, Haines et al. 2019, 7.4) for a unit sphere 1e4 away and from
-//!   1 unit above a sphere of radius 1e4;
-//! * offset_ray_origin (common.glsl, Waechter & Binder 2019, 7.3) at |p| ~ 1e5, at mixed
+//!   light's edges, "Stable cones and solid angles") for tiny, far, huge and oblique rects;
+//! * intersect_sphere (shapes.glsl, Haines et al. 2019, "Ray-sphere intersection") for a unit
+//!   sphere 1e4 away and from 1 unit above a sphere of radius 1e4;
+//! * offset_ray_origin (common.glsl, Waechter & Binder 2019, "Ray offsets") at |p| ~ 1e5, at mixed
 //!   magnitudes and near the origin: the origin moves to the normal's side, by little, and rays
 //!   leaving the surface (down to grazing, n.d = 1e-4) never re-hit their own rect or disk;
-//! * the sun's cone sampler (sample_sun / light_pdf, 2.5, 7.2) for angular radii from 1e-4 degree
+//! * the sun's cone sampler (sample_sun / light_pdf, "Sun lights") for angular radii from 1e-4 degree
 //!   to 15 degrees.
 //!
 //! Each test prints its worst measured error and asserts a bound a few times above it and far
@@ -204,7 +204,7 @@ fn rect_omega(p: DVec3, s: DVec3, ex: DVec3, ey: DVec3) -> f64 {
 }
 
 /// The naive float32 form: triple products a.(b x c) from the corner vectors (50% off at 2e-8 sr,
-/// TECHNIQUES.md 2.1).
+/// docs/techniques.md, "Stable cones and solid angles").
 fn rect_omega_naive_f32(p: DVec3, s: DVec3, ex: DVec3, ey: DVec3) -> f64 {
     let f = |v: DVec3| v.as_vec3();
     let tri = |a: Vec3, b: Vec3, c: Vec3| {
@@ -428,8 +428,8 @@ fn sphere_hc(c: DVec3, r: f64) -> [f32; 4] {
     [(c.length() - r) as f32, c.length() as f32, 0.0, 0.0]
 }
 
-/// The classic float32 form with b^2 - c (TECHNIQUES.md 7.4): 10000.0 instead of 9999.564 at
-/// 0.9 r off axis, 1e4 away.
+/// The classic float32 form with b^2 - c (docs/techniques.md, "Ray-sphere intersection"): 10000.0
+/// instead of 9999.564 at 0.9 r off axis, 1e4 away.
 fn ray_sphere_naive_f32(c: DVec3, r: f64, o: DVec3, d: DVec3) -> f64 {
     let (c, o, d, r) = (c.as_vec3(), o.as_vec3(), d.as_vec3(), r as f32);
     let f = o - c;

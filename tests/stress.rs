@@ -497,7 +497,8 @@ fn grazing_glossy_against_reference() {
 /// The reference's quadrature over each kind of light against closed forms: a Lambert surface
 /// of albedo 1 under a rect light (Lambert's polygon formula), a sphere light and a sun cone
 /// both cut by the horizon (Snyder's formula) and a constant dome (radiance L); and the
-/// D-BRDF's directional albedo at α = 1 under the dome against TECHNIQUES.md §1.4's table.
+/// D-BRDF's directional albedo at α = 1 under the dome against the table of docs/techniques.md,
+/// "Reference values".
 #[test]
 fn glossy_reference_quadrature_matches_closed_forms() {
     use illum::stress::closed_form::{polygon_irradiance, sphere_irradiance};
@@ -575,9 +576,9 @@ fn glossy_reference_quadrature_matches_closed_forms() {
         dome,
         1e-10,
     );
-    // D-BRDF, α = 1, F = 1: the directional albedo is P(n·l > 0) under h ~ D (n·h) (§1.4); at
-    // normal view that is P(θ_h < 45°) = 1 − exp(−1/α²) exactly; at 45° the table's 0.605 (MC,
-    // quadrature within 2e-3).
+    // D-BRDF, α = 1, F = 1: the directional albedo is P(n·l > 0) under h ~ D (n·h)
+    // (docs/techniques.md, "The D-BRDF"); at normal view that is P(θ_h < 45°) = 1 − exp(−1/α²)
+    // exactly; at 45° the table's 0.605 (MC, quadrature within 2e-3).
     for (theta, want, tol) in [(0f64, 1.0 - (-1f64).exp(), 1e-9), (45.0, 0.605, 3e-3)] {
         let dbrdf = reference::Brdf {
             diffuse: 0.0,

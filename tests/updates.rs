@@ -1,4 +1,4 @@
-//! Updates of a prepared scene without preparing it again (issue 14): a moved camera uploads
+//! Updates of a prepared scene without preparing it again: a moved camera uploads
 //! nothing but its frame constants, edited materials and lights write their own tables only, a
 //! moved instance rebuilds the top level of the trace structure and no bottom level; each gives
 //! the image of the edited scene prepared from scratch, bit for bit.

@@ -53,9 +53,9 @@ bool film_camera_hit(Hit h, vec3 o, vec3 d, inout FilmPixel acc, out vec3 le, ou
     return material;
 }
 
-// Optional firefly clamp of the camera hit's direct lighting (hue-preserving, TECHNIQUES 7.6):
-// biased, off by default; acc.beauty.w counts the samples it reduced. A non-finite value is not
-// hidden here: film_add counts it.
+// Optional firefly clamp of the camera hit's direct lighting (hue-preserving; docs/techniques.md,
+// "Non-finite samples and the firefly clamp"): biased, off by default; acc.beauty.w counts the
+// samples it reduced. A non-finite value is not hidden here: film_add counts it.
 vec3 film_clamp(vec3 direct, inout FilmPixel acc) {
     float clamp_luminance = frame.clamp_luminance;
     float y = luminance(direct);

@@ -1,26 +1,28 @@
 // illum-variants: rq bvh
 // The full integrator's one kernel, for two passes chosen by pc.mode (FullPass, layout.glsl): the
 // film pass and the radiosity cache's update pass share their traversal, direct lighting,
-// materials and lights, so the driver compiles that code once (issue 15 item 4).
+// materials and lights, so the driver compiles that code once (docs/performance-kernels.md,
+// "Kernel compilation").
 //
-// Film pass (FULL_PASS_FILM): the seed's split of the rendering equation (TECHNIQUES.md §6.5),
-// one camera sample at a time: at the camera hit x1, emission seen directly plus direct lighting
-// exactly as primary.comp does (the Direct AOV); the diffuse lobe's indirect light by one
-// cosine-sampled ray whose hit returns its outgoing diffuse radiance, from the radiosity cache or
-// by brute force (IndirectDiffuse); and the specular lobes' indirect light by the reflection
-// integrator (Reflection): a specular chain of up to frame.specular_depth BRDF-sampled bounces,
-// each reflected point shaded like a camera hit (direct lighting in full, its indirect diffuse
-// through the cache). Rays that reach a light or the sky add nothing: direct lighting has them.
-// Paths light -> specular -> diffuse -> eye (caustics) are left out, as in the course.
+// Film pass (FULL_PASS_FILM): the seed's split of the rendering equation (docs/techniques.md,
+// "Indirect lighting: the three integrators"), one camera sample at a time: at the camera hit x1,
+// emission seen directly plus direct lighting exactly as primary.comp does (the Direct AOV); the
+// diffuse lobe's indirect light by one cosine-sampled ray whose hit returns its outgoing diffuse
+// radiance, from the radiosity cache or by brute force (IndirectDiffuse); and the specular lobes'
+// indirect light by the reflection integrator (Reflection): a specular chain of up to
+// frame.specular_depth BRDF-sampled bounces, each reflected point shaded like a camera hit (direct
+// lighting in full, its indirect diffuse through the cache). Rays that reach a light or the sky add
+// nothing: direct lighting has them. Paths light -> specular -> diffuse -> eye (caustics) are left
+// out, as in the course.
 //
 // Update pass (FULL_PASS_UPDATE, src/render/indirect/radiosity.rs): one path per block x block
-// pixels (gl_GlobalInvocationID.xy) and update index (pc.update.index + gl_GlobalInvocationID.z):
-// a camera ray through a random point of the block, a first bounce chosen as the film pass's
-// camera hit chooses (diffuse or specular lobe), then up to pc.update.vertices diffuse vertices.
-// At each it writes a record of B = rho/pi E: direct lighting of the diffuse lobe plus one
-// cosine-sampled bounce whose hit reads the cache's current table (the previous generation: one
-// Jacobi iteration of the radiosity equation per generation, TECHNIQUES §6.3), filed under its
-// cell's keys at the cone width the render's lookups there will have. The host averages the
+// pixels (gl_GlobalInvocationID.xy) and update index (pc.update.index + gl_GlobalInvocationID.z): a
+// camera ray through a random point of the block, a first bounce chosen as the film pass's camera
+// hit chooses (diffuse or specular lobe), then up to pc.update.vertices diffuse vertices. At each
+// it writes a record of B = rho/pi E: direct lighting of the diffuse lobe plus one cosine-sampled
+// bounce whose hit reads the cache's current table (the previous generation: one Jacobi iteration
+// of the radiosity equation per generation, docs/techniques.md, "The radiosity cache"), filed under
+// its cell's keys at the cone width the render's lookups there will have. The host averages the
 // records into the next generation's table.
 #version 460
 #include "indirect.glsl"

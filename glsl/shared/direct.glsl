@@ -1,7 +1,8 @@
 // The direct-lighting integrator of "Physically Based Lighting at Pixar" (Hery & Villemin 2013),
-// TECHNIQUES.md section 3.2: per light and per lobe, light samples and BRDF samples combined by
-// multiple importance sampling (power heuristic), BRDF samples pruned to those that hit a light,
-// and shadow rays traced only for the samples whose MIS-weighted contribution is not zero.
+// docs/techniques.md, "The direct-lighting estimator": per light and per lobe, light samples and
+// BRDF samples combined by multiple importance sampling (power heuristic), BRDF samples pruned to
+// those that hit a light, and shadow rays traced only for the samples whose MIS-weighted
+// contribution is not zero.
 //
 // Conventions:
 // * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
@@ -27,7 +28,7 @@
 // * A shading point on an emitter's own surface (emissive geometry lit by itself) sees that
 //   emitter as a sphere from inside (LIGHT_FLAG_SELF) or, for a planar emitter, not at all.
 // * A BRDF sample finds the finite lights it crosses by traversing the light BVH (a tree over their
-//   bounds, src/render/lights.rs); the infinite lights (dome, sun) are always tested. At most
+//   bounds, src/gpu_scene/lights.rs); the infinite lights (dome, sun) are always tested. At most
 //   DIRECT_MAX_CROSSED lights along one direction are counted.
 #ifndef ILLUM_DIRECT_GLSL
 #define ILLUM_DIRECT_GLSL
@@ -209,7 +210,8 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
 
 #include "shadow.glsl"
 
-// Control variates (FEATURE_CONTROL_VARIATES, TECHNIQUES.md 5): for a looped light, the N light
+// The estimator and its conditions: docs/techniques.md, "Control variates".
+// Control variates (FEATURE_CONTROL_VARIATES): for a looped light, the N light
 // samples' diffuse terms g_j = (rho/pi) Lc(w_j) max(0, n.w_j) / (pdf_j N), with Lc a control
 // radiance (zero where eval_lobes gives zero: below n's or ng's horizon), have the analytic
 // unshadowed sum G = (rho/pi) control_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
@@ -222,7 +224,7 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
 //     a_j is independent of sample j, so E[a_j (G/N - g_j)] = E[a_j] * 0: unbiased.
 // s_j is the sample's own contribution, with the light's true radiance: for an untextured light
 // Lc is that radiance (s_j = g_j on the diffuse part); a textured light uses its mean radiance
-// Lc = GpuLight.mean (5.1 rule 2: any constant control is exact, the mean is the one that cancels
+// Lc = GpuLight.mean (condition 2: any constant control is exact, the mean is the one that cancels
 // most of the variance). A sample is "traced" when max(0, n.w_j) / pdf_j > 0 (whatever Lc);
 // a_j = 0 when no other sample was traced; other samples count in N and take a_j = a. Below, the
 // sums are RGB in units of rho / pi: sv, so = sum of Lc(w_j) max(0, n.w_j) / (pdf_j N) over the
@@ -230,7 +232,7 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
 // terms are left as they are.
 // Kinds: rect, disk, sphere, triangle (Lambert's polygon formula) and sun (the cap formula with
 // sin^2 sigma = sin^2 theta_s; delta sun: E_perp max(0, n.s), where g_j = G and the control adds
-// nothing) and the dome (5.6; constant: G = pi L). Not covered: lights picked from the tree or
+// nothing) and the dome (SH9; constant: G = pi L). Not covered: lights picked from the tree or
 // the scan (one sample per pick; see docs/control-variates.md).
 bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffuse_mis) {
     if (light_self(l) || (l.kind == LIGHT_DOME && !has_feature(FEATURE_DOME))) return false;

@@ -1,17 +1,18 @@
 // Analytic unshadowed irradiance of the light shapes at a point p with normal n, for the control
-// variates of TECHNIQUES.md section 5 (the course's diffConvolution).
+// variates (the course's diffConvolution; docs/techniques.md, "Analytic unshadowed irradiance"
+// and "Control variates").
 //
 // Conventions:
 // * irradiance_*() of an area light returns E / L for a uniform emitter of radiance L, i.e.
 //   pi * form factor (integral over the visible emitter of max(0, n.w) dw). Multiply by the light's
 //   (mean) radiance. The sun returns E / E_perp (GpuLight.radiance holds E_perp). The dome's
-//   control is SH9 (5.6): sh9_irradiance() of its coefficients; light_irradiance() gives 0.
+//   control is SH9: sh9_irradiance() of its coefficients; light_irradiance() gives 0.
 // * The same one-sidedness as light_sampling.glsl: p behind a one-sided emitter (or inside a
 //   one-sided sphere) gets 0; the receiver hemisphere is clipped at n's horizon (max(0, n.w)),
 //   so the result is the exact integral the samples of light_sampling.glsl estimate with
 //   g = L max(0, n.wi) / pdf.
 // Formulas:
-// * sphere and sun: the cap formula of Snyder 1996 in the Frostbite form (5.3), exact including the
+// * sphere and sun: the cap formula of Snyder 1996 in the Frostbite form, exact including the
 //   horizon crossing; sin^2 and cos of the cap's angular radius come in precomputed without
 //   cancellation. Inside a two-sided sphere: pi.
 // * rect, triangle: Lambert's polygon formula with the Hill & Heitz 2017 rational edge term (1/(2 pi)
@@ -19,8 +20,8 @@
 //   streaming the vertices (a convex polygon crosses the plane at most twice: the clipped polygon is
 //   the visible parts of its edges plus one closing edge in the plane). Lights that subtend less
 //   than 1e-4 sr (area / d^2) use the point approximation A cos_l max(0, cos_r) / d^2, which is more
-//   accurate in float32 there (TECHNIQUES 5.4: 8e-8 vs 4e-3 at size/distance 1e-3).
-// * disk: the closed-form vector irradiance (5.5), written without cancellation, while the whole
+//   accurate in float32 there (8e-8 vs 4e-3 at size/distance 1e-3).
+// * disk: the closed-form vector irradiance, written without cancellation, while the whole
 //   disk is above the horizon; across the horizon a regular 32-gon with the disk's area, clipped
 //   as above (error O(1/N^2): below 2e-3 relative in tests/sampling.rs's cases).
 #ifndef ILLUM_IRRADIANCE_GLSL
@@ -178,7 +179,8 @@ float irradiance_disk(vec3 p, vec3 n, vec3 c, vec3 nd, vec3 td, float R, bool tw
     float np = dot(n, pc);
     if (np <= -reach) return 0.0;
     if (np >= reach) {
-        // Vector irradiance (TECHNIQUES 5.5) with S - Q and Q - A formed without cancellation:
+        // Vector irradiance (docs/techniques.md, "Analytic unshadowed irradiance") with S - Q and
+        // Q - A formed without cancellation:
         // Q^2 = A^2 + 4 h^2 R^2 = S^2 - 4 a^2 R^2, A = h^2 + a^2 - R^2, S = h^2 + a^2 + R^2.
         vec3 radial = -pc - h * nd;              // from the axis to p, in the disk plane
         float a2 = dot(radial, radial);

@@ -43,11 +43,12 @@
 #define FEATURE_MANY_LIGHTS 128
 // Settings, not the scene: shadow rays for a resampled subset of the candidates
 // (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
-// Off, their code is left out of the kernels (glsl/shared/direct.glsl, TECHNIQUES.md 4.2, 4.3).
+// Off, their code is left out of the kernels (glsl/shared/direct.glsl; docs/techniques.md,
+// "Shadow resampling", "Shadow culling").
 #define FEATURE_SHADOW_RESAMPLE 256
 #define FEATURE_SHADOW_CULL 512
-// Settings: control variates for the diffuse light samples of rect, disk and sphere lights
-// (Frame.control_variates; TECHNIQUES.md 5).
+// Settings: control variates for the diffuse light samples of the looped lights
+// (Frame.control_variates; docs/techniques.md, "Control variates").
 #define FEATURE_CONTROL_VARIATES 1024
 // Disk and sphere lights, analytic or emissive shapes (like FEATURE_RECT_LIGHTS).
 #define FEATURE_DISK_LIGHTS 2048
@@ -142,7 +143,8 @@
 // above it, light samples pick lights (FEATURE_MANY_LIGHTS). Measured: docs/performance.md.
 #define DIRECT_LOOP_LIGHTS 64
 // How light samples pick lights (Frame.light_select): loop over every light, the former linear
-// scan of a CDF over all lights (kept for comparison), or the light tree (TECHNIQUES.md 2.7).
+// scan of a CDF over all lights (kept for comparison), or the light tree (docs/techniques.md,
+// "The light tree").
 #define LIGHT_SELECT_LOOP 0
 #define LIGHT_SELECT_SCAN 1
 #define LIGHT_SELECT_TREE 2
@@ -310,7 +312,7 @@ struct GpuLight {
     uint pad;
 };
 
-// Importance-sampling tables of a dome's map (src/render/dome.rs builds them;
+// Importance-sampling tables of a dome's map (src/gpu_scene/dome.rs builds them;
 // glsl/shared/light_sampling.glsl reads them) over a grid of width x height cells of its map
 // coordinates (glsl/shared/dome_map.glsl: the texels, or for the Mitsuba convention the cells
 // between texel centres), each weighted by the luminance the lookup gives inside it (every cell
@@ -329,7 +331,7 @@ struct GpuDomeSampling {
                            // (src/gpu_scene/dome_sh.rs): the control variate's L_SH
 };
 
-// A node of the light BVH (src/render/lights.rs): BRDF samples find the finite lights they cross
+// A node of the light BVH (src/gpu_scene/lights.rs): BRDF samples find the finite lights they cross
 // by traversing it instead of testing every light. count == 0: inner node with children `index`
 // and `index + 1`; else a leaf of light_refs[index .. index + count].
 struct GpuLightNode {
@@ -339,9 +341,9 @@ struct GpuLightNode {
     uint count;
 };
 
-// A node of the light tree (src/gpu_scene/light_tree.rs; TECHNIQUES.md 2.7): light samples
-// descend it choosing children by importance. Depth-first: an inner node's first child is the next
-// node, its second `link`; a leaf (LIGHT_TREE_LEAF in link) holds one light.
+// A node of the light tree (src/gpu_scene/light_tree.rs; docs/techniques.md, "The light tree"):
+// light samples descend it choosing children by importance. Depth-first: an inner node's first
+// child is the next node, its second `link`; a leaf (LIGHT_TREE_LEAF in link) holds one light.
 struct GpuLightTreeNode {
     vec3 lo;         // bounds of the subtree's emitters
     float power;     // emitted power (luminance), relative to the root's

@@ -1,5 +1,7 @@
 // Light sampling: for every light kind a sampler and the pdf() of an arbitrary direction, with
-// pdf() equal to the density the sampler produces (what MIS needs, TECHNIQUES.md 2.0 and 3.3).
+// pdf() equal to the density the sampler produces (what MIS needs: docs/techniques.md,
+// "Light sampling: conventions"; one section per kind below, from "Rect lights" to
+// "Dome importance sampling").
 //
 // Conventions:
 // * p is the shading point (camera-relative world space, like GpuLight). Directions are unit.
@@ -21,15 +23,15 @@
 // * rect (p0 centre, p1/p2 full edges): solid-angle sampling (Urena et al. 2013, spherical
 //   rectangle) when its solid angle Omega is in [1e-3, 6.22] sr, with Omega from two Van Oosterom-
 //   Strackee triangles whose triple product comes from the light's own edges (float32-robust,
-//   TECHNIQUES 2.1); area sampling below 1e-3 sr; above 6.22 sr (a rect that nearly encloses p's
+//   "Rect lights"); area sampling below 1e-3 sr; above 6.22 sr (a rect that nearly encloses p's
 //   hemisphere) uniform sampling of the hemisphere facing the rect, a direction that misses it being
 //   no sample (>= 99% hit). pdf() takes the same decision from the same Omega.
 // * sphere (p0 centre, radius): uniform cone of the visible cap with the stable 1 - cos(theta_max)
-//   (2.2); from inside (two-sided only) uniform area sampling.
-// * disk (p0 centre, radius; p1 normal; p2 tangent): area sampling, concentric map (2.3); near a
+//   ("Sphere lights"); from inside (two-sided only) uniform area sampling.
+// * disk (p0 centre, radius; p1 normal; p2 tangent): area sampling, concentric map; near a
 //   disk large for its distance, the planar mixture below.
 // * sun (p0 direction, cos(theta_max); p1.x = 1 - cos(theta_max)): uniform cone; delta light
-//   (delta = true, pdf = 1, no MIS) when p1.x == 0 (2.5).
+//   (delta = true, pdf = 1, no MIS) when p1.x == 0 ("Sun lights").
 // * triangle (LIGHT_TRIANGLE: p0 vertex 0, p1/p2 edges to vertices 1 and 2): uniform area sampling
 //   (b1, b2) = sqrt(u1) (1 - u2, u2). Chosen over spherical-triangle sampling for robustness (no
 //   angle differences; the same float32 pitfalls as the rect's angle sum); MIS with BRDF samples
@@ -42,9 +44,9 @@
 //   area and half uniformly over the hemisphere facing the emitter (a miss is no sample); pdf =
 //   (p_area + 1 / (2 pi)) / 2 bounds every weight by 4 pi times the integrand. The decision
 //   depends on p and the light only, and pdf() repeats it.
-// * dome: piecewise-constant sampling of the map's cells (2.4; glsl/shared/dome_map.glsl) with the
-//   marginal/conditional CDFs of GpuDomeSampling (searched from guide tables), then a uniform
-//   position inside the cell:
+// * dome: piecewise-constant sampling of the map's cells ("Dome importance sampling";
+//   glsl/shared/dome_map.glsl) with the marginal/conditional CDFs of GpuDomeSampling (searched
+//   from guide tables), then a uniform position inside the cell:
 //   pdf = P(row) P(cell | row) W H / (dω / du dv), 2 pi^2 sin(theta) for lat-long maps, 4 pi for
 //   the equal-area square. Probabilities are differences of the stored float CDFs, which is
 //   exactly the mass the binary search gives each cell. Without a table (width == 0) the dome is
@@ -97,7 +99,7 @@ bool in_cone(vec3 w, vec3 z, float om) {
     vec3 wz = w - z;
     return dot(wz, wz) <= 2.0 * om * (1.0 + LIGHT_EDGE_MARGIN) + 4.0 * LIGHT_POSITION_ULPS * sqrt(2.0 * om);
 }
-const float RECT_OMEGA_MIN = 1e-3;         // solid-angle sampling range of rects (TECHNIQUES 2.1)
+const float RECT_OMEGA_MIN = 1e-3;         // solid-angle sampling range of rects ("Rect lights")
 const float RECT_OMEGA_MAX = 6.22;
 const float HEMISPHERE_PDF = 0.5 / PI;     // uniform hemisphere, 1 / (2 pi)
 
@@ -126,7 +128,7 @@ bool light_two_sided(GpuLight l) { return (l.flags & LIGHT_FLAG_TWO_SIDED) != 0u
 bool light_self(GpuLight l) { return (l.flags & LIGHT_FLAG_SELF) != 0u; }
 
 // Completes an area sample at point x with normal nl and area density 1 / area: converts the pdf to
-// solid angle (TECHNIQUES 2.0).
+// solid angle (docs/techniques.md, "Light sampling: conventions").
 LightSample area_light_sample(vec3 p, vec3 x, vec3 nl, float area, vec2 uv) {
     LightSample s = no_light_sample();
     vec3 q = x - p;
@@ -224,7 +226,8 @@ LightSample sample_rect(GpuLight l, vec3 p, vec2 u) {
     if (!rect_use_solid_angle(omega)) {
         return area_light_sample(p, corner + u.x * ex + u.y * ey, nl, area, u);
     }
-    // Urena, Fajardo, King 2013 (TECHNIQUES 2.1), in the rect's frame with p at the origin.
+    // Urena, Fajardo, King 2013 (docs/techniques.md, "Rect lights"), in the rect's frame with p at
+    // the origin.
     float exl = length(ex), eyl = length(ey);
     vec3 X = ex / exl, Y = ey / eyl, Z = cross(X, Y);
     vec3 dd = corner - p;

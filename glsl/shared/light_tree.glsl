@@ -1,7 +1,8 @@
-// The light tree's importance and descent (TECHNIQUES.md 2.7; built by src/gpu_scene/
-// light_tree.rs, which also holds the float64 twin that the tests compare with). One function
-// serves the sampler and the PMF of a given light, so that the MIS weight of a BRDF sample uses
-// exactly the probability the sampler had. Only buffer addresses come in: test kernels call it too.
+// The light tree's importance and descent (docs/techniques.md, "The light tree"; built by
+// src/gpu_scene/light_tree.rs, which also holds the float64 twin that the tests compare with). One
+// function serves the sampler and the PMF of a given light, so that the MIS weight of a BRDF sample
+// uses exactly the probability the sampler had. Only buffer addresses come in: test kernels call it
+// too.
 #ifndef ILLUM_LIGHT_TREE_GLSL
 #define ILLUM_LIGHT_TREE_GLSL
 

@@ -1,5 +1,6 @@
 // Specular microfacet lobes (GpuLobe): the course's D-BRDF and two Cook-Torrance models, with
-// their Fresnel terms, evaluation (f cos and pdf) and importance sampling. TECHNIQUES.md section 1.
+// their Fresnel terms, evaluation (f cos and pdf) and importance sampling (docs/techniques.md,
+// "The D-BRDF", "Cook-Torrance lobes", "Fresnel" and "Roughness floor and delta lobes").
 //
 // Conventions (every function here):
 // * Directions are unit vectors pointing away from the surface: v toward the viewer, l (wi) toward
@@ -22,13 +23,14 @@
 //
 // Models (GpuLobe.distribution):
 // * DIST_DBRDF, the course's D-BRDF: Beckmann D, f cos = F D(h) (n.h) / (4 (v.h)). Sampled from
-//   D(h)(n.h) with the Box-Muller slope form (TECHNIQUES 1.3), so that the weight is exactly F
-//   (1.4); pdf = D(h)(n.h) / (4 |v.h|) computed from (1 - u1), without exp().
+//   D(h)(n.h) with the Box-Muller slope form (docs/techniques.md, "The D-BRDF"), so that the
+//   weight is exactly F; pdf = D(h)(n.h) / (4 |v.h|) computed from (1 - u1), without exp().
 // * DIST_BECKMANN_SMITH: Cook-Torrance with Beckmann D and the separable Smith G = G1(v) G1(l),
 //   G1 by Walter et al. 2007's rational approximation (the Mitsuba 3 `roughconductor` convention).
 //   Sampled like the D-BRDF (plain D(h)(n.h), not visible normals); weight F G (v.h)/((n.v)(n.h)).
-//   Its albedo differs from the exact-Lambda separable model of TECHNIQUES 1.4 by the approximation
-//   error of the rational G1 (below 1e-3; tests/brdf.rs measures it).
+//   Its albedo differs from the exact-Lambda separable model (docs/techniques.md,
+//   "Reference values") by the approximation error of the rational G1 (below 1e-3; tests/brdf.rs
+//   measures it).
 // * DIST_GGX_SMITH: Cook-Torrance with GGX (Trowbridge-Reitz) D and the height-correlated Smith
 //   G2 = 1 / (1 + Lambda(v) + Lambda(l)) (the pbrt-v4 `ConductorBxDF` convention; pbrt's
 //   "roughness" is sqrt(alpha), this alpha is alpha). Sampled with visible normals (Heitz 2018):
@@ -106,7 +108,7 @@ bool lobe_is_ggx(GpuLobe lobe) {
     return lobe.distribution == DIST_GGX_SMITH || lobe.distribution == DIST_GGX_SMITH_SEPARABLE;
 }
 
-// Anisotropic Beckmann D(h), h local (TECHNIQUES 1.1).
+// Anisotropic Beckmann D(h), h local (docs/techniques.md, "The D-BRDF").
 float beckmann_d(vec3 h, vec2 a) {
     if (h.z <= 0.0) return 0.0;
     float c2 = h.z * h.z;
@@ -228,7 +230,8 @@ BrdfSample brdf_sample(GpuLobe lobe, vec3 n, vec3 t, vec3 b, vec3 v, vec2 u) {
         h = normalize(vec3(a.x * Nh.x, a.y * Nh.y, max(1e-7, Nh.z)));
         pdf = 0.0;  // set below, once l is known to be valid
     } else {
-        // Beckmann D(h)(n.h) by Box-Muller slopes (TECHNIQUES 1.3): exponent = r^2 = -log(1 - u1).
+        // Beckmann D(h)(n.h) by Box-Muller slopes (docs/techniques.md, "The D-BRDF"): exponent =
+        // r^2 = -log(1 - u1).
         float om = max(1.0 - u.x, 5.9604645e-8);
         float r = sqrt(-log(om));
         float psi = 2.0 * PI * u.y;

@@ -1,5 +1,6 @@
 // Multiple importance sampling weights: the power heuristic (beta = 2) in an overflow-safe ratio
-// form (TECHNIQUES.md 3.1) and the course's per-(lobe, light) specular terms (3.2).
+// form and the course's per-(lobe, light) specular terms (docs/techniques.md,
+// "Multiple importance sampling").
 //
 // Conventions:
 // * Techniques: L = light sampling of one light (N_L samples, solid-angle pdf p_L), B = BRDF
@@ -61,8 +62,8 @@ float mis_power(float n_a, float p_a, float n_b, float p_b) {
 float mis_light_weight(float n_l, float p_l, float n_b, float p_b) { return mis_power(n_l, p_l, n_b, p_b); }
 float mis_brdf_weight(float n_l, float p_l, float n_b, float p_b) { return mis_power(n_b, p_b, n_l, p_l); }
 
-// The course's per-(lobe, light) specular terms for the D-BRDF, whose f cos = F p_B (TECHNIQUES
-// 1.4): with r = N_B p_B / (N_L p_L),
+// The course's per-(lobe, light) specular terms for the D-BRDF, whose f cos = F p_B
+// (docs/techniques.md, "The D-BRDF"): with r = N_B p_B / (N_L p_L),
 //   light sample:            C_L = (1/N_L) F L_e (N_L^2 p_L p_B) / ((N_L p_L)^2 + (N_B p_B)^2)
 //                                = F L_e * (1/N_B) r / (1 + r^2)        <= F L_e / (2 N_B)
 //   BRDF sample on the light: C_B = (1/N_B) F L_e (N_B p_B)^2 / ((N_L p_L)^2 + (N_B p_B)^2)

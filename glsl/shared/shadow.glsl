@@ -1,5 +1,6 @@
 // Shadow rays of direct lighting (direct.glsl): culling and resampling of the candidates
-// (TECHNIQUES.md 4.2, 4.3), and the one ray per iteration of direct_lighting()'s loop.
+// (docs/techniques.md, "Shadow culling" and "Shadow resampling"), and the one ray per iteration
+// of direct_lighting()'s loop.
 //
 // Why: the driver inlines every call, so each call site of trace_occluded() is a copy of the
 // traversal for LLVM to compile (about a second of CPU each on a cold cache). direct_lighting()
@@ -60,9 +61,10 @@ void shadow_ray(vec3 w, float dist, vec3 c, float cv_s, bool flush) {
     g_ray_flush = flush;
 }
 
-// Fewer shadow rays (TECHNIQUES.md 4.2, 4.3). Every candidate (a light or BRDF sample with its
-// unshadowed, MIS-weighted contribution c_i, so that the plain estimate is sum_i V_i c_i) goes
-// through shadow_candidate; with neither feature it is traced at once, as before.
+// Fewer shadow rays (docs/techniques.md, "Shadow resampling", "Shadow culling"). Every candidate
+// (a light or BRDF sample with its unshadowed, MIS-weighted contribution c_i, so that the plain
+// estimate is sum_i V_i c_i) goes through shadow_candidate; with neither feature it is traced at
+// once, as before.
 //
 // Culling (FEATURE_SHADOW_CULL, Russian roulette): with p_i = luminance(c_i) and threshold t, the
 // candidate is kept with probability q_i = min(1, p_i / t) and then counts c_i / q_i:

@@ -8,20 +8,21 @@ float safe_length(vec3 v) {
     return m > 0.0 ? m * length(v / m) : 0.0;
 }
 
-// Precise ray/sphere (Haines et al. 2019, Ray Tracing Gems ch. 7; docs/techniques.md, "Ray and
-// sphere"): the discriminant from the centre-to-line vector l, not b^2 - 4ac, and the near root
-// from the product of the roots, c = |f|^2 - r^2 = h (|f| + r) with h = |o - c| - r the signed
-// distance of the origin to the surface. h comes from the host's double-precision h0 = |c| - r
-// and |c| (hc, for the frame's origin, where camera rays start) and the exact identity
-// |o - c| - |c| = o . (o - 2c) / (|o - c| + |c|), so that it keeps the precision of o, not of
-// the sphere's size: a camera 1.5 above a sphere of radius 1e8 gets h = 1.5, where f.f - r^2
-// rounds to a multiple of 1e9. No intermediate exceeds O(r) (r^2 overflows from 1.8e19).
 // The signed distance |o - c| - r of o to a sphere, with |o - c| = fl (see intersect_sphere).
 float sphere_distance(vec3 c, vec2 hc, vec3 o, float fl) {
     float den = fl + hc.y;
     return hc.x + (den > 0.0 ? dot(o, (o - 2.0 * c) / den) : 0.0);
 }
 
+// Precise ray/sphere (Haines et al. 2019, Ray Tracing Gems ch. 7; docs/techniques.md,
+// "Ray-sphere intersection"): the discriminant from the centre-to-line vector l, not b^2 - 4ac,
+// and the near root from the product of the roots, c = |f|^2 - r^2 = h (|f| + r) with
+// h = |o - c| - r the signed distance of the origin to the surface. h comes from the host's
+// double-precision h0 = |c| - r and |c| (hc, for the frame's origin, where camera rays start)
+// and the exact identity |o - c| - |c| = o . (o - 2c) / (|o - c| + |c|), so that it keeps the
+// precision of o, not of the sphere's size: a camera 1.5 above a sphere of radius 1e8 gets
+// h = 1.5, where f.f - r^2 rounds to a multiple of 1e9. No intermediate exceeds O(r) (r^2
+// overflows from 1.8e19).
 float intersect_sphere(vec3 c, float r, vec2 hc, vec3 o, vec3 d, float tmin, float tmax) {
     vec3 f = o - c;
     float fl = safe_length(f);

@@ -161,11 +161,12 @@ pub struct IntegratorArgs {
     #[arg(long, value_name = "KIND", default_value = "tree")]
     pub light_selection: crate::render::LightSelection,
     /// Trace shadow rays for this share (0 to 1] of each group's light and BRDF samples, picked by
-    /// resampling on their unshadowed luminance, unbiased (TECHNIQUES.md 4.2); 1: all.
+    /// resampling on their unshadowed luminance, unbiased (docs/techniques.md,
+    /// "Shadow resampling"); 1: all.
     #[arg(long, value_name = "PCT", default_value_t = 1.0)]
     pub shadow_resample: f32,
     /// Russian roulette before each shadow ray: keep a sample with probability min(1, its
-    /// luminance / this), unbiased (TECHNIQUES.md 4.3); 0: off.
+    /// luminance / this), unbiased (docs/techniques.md, "Shadow culling"); 0: off.
     #[arg(long, value_name = "T", default_value_t = 0.0)]
     pub shadow_cull: f32,
     /// Control variates for diffuse light samples of looped rect, disk, sphere, triangle, sun and

@@ -1,6 +1,6 @@
 //! Importance-sampling tables of a dome (environment) light's map, read by `sample_dome`/`dome_hit`
-//! in glsl/shared/light_sampling.glsl (TECHNIQUES.md 2.4), for each map convention of
-//! glsl/shared/dome_map.glsl.
+//! in glsl/shared/light_sampling.glsl (docs/techniques.md, "Dome importance sampling"), for each
+//! map convention of glsl/shared/dome_map.glsl.
 //!
 //! The tables cover a grid of cells in map coordinates (u, v), and a cell's weight is the luminance
 //! `lum(tint ⊙ L)` the convention's lookup gives inside it, times the solid angle per unit map
@@ -21,7 +21,7 @@
 //! uniform point inside the cell. Each CDF of n intervals has a guide of n buckets: bucket k holds
 //! the index range `[lo, hi)` of the intervals that u in [k/n, (k+1)/n) (widened by 1e-6, more than
 //! the GPU's rounding of `u n`) can fall in, so the search runs over a few intervals instead of n
-//! (issue 15: O(1) expected steps) and still returns the index of the full search; its pdf is `P(row) P(cell | row) W H / (dω/du dv)` with the
+//! (O(1) expected steps) and still returns the index of the full search; its pdf is `P(row) P(cell | row) W H / (dω/du dv)` with the
 //! probabilities taken as differences of the stored CDFs — exactly the mass the search assigns.
 
 use crate::layout::GpuDomeSampling;

@@ -1,6 +1,7 @@
 //! The dome's radiance projected on real spherical harmonics of order 2 (SH9), in world
-//! directions: the control radiance L_SH of the dome's control variate (TECHNIQUES.md 5.1 rule 2,
-//! 5.6; glsl/shared/irradiance.glsl `sh9_*`).
+//! directions: the control radiance L_SH of the dome's control variate (docs/techniques.md,
+//! "Control variates", condition 2, and "Analytic unshadowed irradiance";
+//! glsl/shared/irradiance.glsl `sh9_*`).
 //!
 //! L_lm = ∫ L(w) Y_lm(w) dω over the sphere, with L what the renderer looks up
 //! (src/scene/dome_map.rs: the convention's map, filter, wrap and the rotation about +Y, the

@@ -1,5 +1,6 @@
 //! The mean radiance of a textured rect, disk or sphere light over its surface: the constant
-//! radiance of its control variate (glsl/shared/direct.glsl, TECHNIQUES.md 5.1 rule 2).
+//! radiance of its control variate (glsl/shared/direct.glsl; docs/techniques.md,
+//! "Control variates", condition 2).
 //!
 //! The mean is taken of what `texture_lookup` returns, under the uv parametrization the light's
 //! samples use (glsl/shared/surface.glsl): rect uv = the unit square, affine in area; disk

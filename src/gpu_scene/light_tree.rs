@@ -1,7 +1,7 @@
-//! The light tree (TECHNIQUES.md §2.7; Conty Estevez & Kulla 2018, pbrt-v4 `BVHLightSampler`):
-//! a binary tree over the finite lights (rect, disk, sphere, triangle; emissive geometry
-//! included), one light per leaf, each node with the bounds, emitted power and orientation cone
-//! of its subtree. Light samples descend it from the root choosing a child with probability
+//! The light tree (docs/techniques.md, "The light tree"; Conty Estevez & Kulla 2018, pbrt-v4
+//! `BVHLightSampler`): a binary tree over the finite lights (rect, disk, sphere, triangle; emissive
+//! geometry included), one light per leaf, each node with the bounds, emitted power and orientation
+//! cone of its subtree. Light samples descend it from the root choosing a child with probability
 //! proportional to its importance at the shading point (glsl/shared/light_tree.glsl); the
 //! probability of a given light is recomputed by replaying its root-to-leaf trail, so that MIS
 //! weights of BRDF samples use the sampler's own PMF. The infinite lights (dome, sun) are not in

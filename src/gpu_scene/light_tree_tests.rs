@@ -175,8 +175,9 @@ fn pmf_sums_to_one_with_the_no_light_share() {
     );
 }
 
-/// TECHNIQUES 2.7 pitfall (5): every light that can light p (some of it above p's horizon and p
-/// on its emitting side) has PMF > 0.
+/// docs/techniques.md, "The light tree": importance is 0 only where provably nothing reaches p, so
+/// every light that can light p (some of it above p's horizon and p on its emitting side) has
+/// PMF > 0.
 #[test]
 fn every_light_that_can_reach_p_has_positive_pmf() {
     let ls = lights(120, 4);
@@ -245,7 +246,8 @@ fn depth_stays_within_the_trail_for_adversarial_layouts() {
 
 #[test]
 fn orientation_measure_of_known_cones() {
-    // M_Omega = pi for a one-sided Lambertian emitter, 4 pi for a point (TECHNIQUES 2.7).
+    // M_Omega = pi for a one-sided Lambertian emitter, 4 pi for a point (docs/techniques.md,
+    // "The light tree").
     let b = |theta_o| Bounds {
         lo: DVec3::ZERO,
         hi: DVec3::ONE,

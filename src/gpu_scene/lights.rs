@@ -1,8 +1,8 @@
 //! The light BVH: a binary tree over the bounds of the finite lights (rect, disk, sphere,
 //! triangle), so that a BRDF sample finds the lights it crosses in O(log n) instead of testing
-//! every light (TECHNIQUES.md §3.3). Infinite lights (dome, sun) are listed after the tree's
-//! references and always tested. Median split on the longest axis of the centroids; leaves of at
-//! most two lights.
+//! every light (docs/techniques.md, "The light BVH for BRDF samples"). Infinite lights (dome, sun)
+//! are listed after the tree's references and always tested. Median split on the longest axis of
+//! the centroids; leaves of at most two lights.
 
 use crate::layout::*;
 use glam::Vec3;

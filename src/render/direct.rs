@@ -1,6 +1,6 @@
 //! The direct-lighting integrator (glsl/primary.comp, glsl/shared/direct.glsl): camera rays, the
 //! AOVs, and emission plus direct lighting at the first hit, estimated as "Physically Based
-//! Lighting at Pixar" does (TECHNIQUES.md §3).
+//! Lighting at Pixar" does (docs/techniques.md, "The direct-lighting estimator").
 
 use super::integrator::{Integrator, IntegratorPasses};
 use super::{ControlVariates, IntegratorSettings, LightSelection, PreparedScene, Technique};

@@ -1,4 +1,4 @@
-//! Progressive rendering recorded into the host's own command buffers (issue 14): a
+//! Progressive rendering recorded into the host's own command buffers: a
 //! [`RenderSession`] on a prepared scene records each pass (frame constants, dispatches, barriers)
 //! into a command buffer the host owns and submits, and writes the beauty into the host's storage
 //! image, and each AOV plane the host asks for ([`RenderSession::add_aov_target`]) into another.

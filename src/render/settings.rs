@@ -7,7 +7,7 @@ use crate::trace::TraceMode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-/// How direct lighting is estimated (TECHNIQUES.md §3).
+/// How direct lighting is estimated (docs/techniques.md, "The direct-lighting estimator").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Technique {
     /// BRDF sampling only: lights are found by the BRDF samples that hit them.
@@ -50,7 +50,7 @@ pub enum IntegratorKind {
     #[default]
     Direct,
     /// The seed's split: direct lighting, indirect diffuse through the radiosity cache, and the
-    /// reflection integrator (TECHNIQUES.md §6.5).
+    /// reflection integrator (docs/techniques.md, "Indirect lighting: the three integrators").
     Full,
     /// A brute-force unidirectional path tracer: the reference for `Full`.
     Path,
@@ -70,7 +70,7 @@ impl IntegratorKind {
 /// (glsl/shared/direct.glsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSelection {
-    /// Descend the light tree (TECHNIQUES.md §2.7): O(log n) per sample.
+    /// Descend the light tree (docs/techniques.md, "The light tree"): O(log n) per sample.
     #[default]
     Tree,
     /// The former linear scan of a CDF over every light: O(n) per shading point (for comparison).
@@ -117,9 +117,9 @@ impl std::str::FromStr for LightSelection {
     }
 }
 
-/// Control variates for the diffuse light samples of rect, disk and sphere lights (TECHNIQUES.md
-/// §5, glsl/shared/direct.glsl): the analytic unshadowed irradiance scaled by a visibility
-/// estimate.
+/// Control variates for the diffuse light samples of the looped lights (docs/techniques.md,
+/// "Control variates"; glsl/shared/direct.glsl): the analytic unshadowed irradiance scaled by a
+/// visibility estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ControlVariates {
     #[default]
@@ -180,10 +180,11 @@ pub struct IntegratorSettings {
     /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
     pub light_selection: LightSelection,
     /// Share of each group's shadow-ray candidates that get shadow rays, picked by systematic
-    /// resampling on their unshadowed luminance (TECHNIQUES.md §4.2); 1: all, as without it.
+    /// resampling on their unshadowed luminance (docs/techniques.md, "Shadow resampling"); 1: all,
+    /// as without it.
     pub shadow_resample: f32,
     /// Russian roulette on each candidate before its shadow ray: kept with probability
-    /// min(1, luminance / this), then divided by it (TECHNIQUES.md §4.3); 0: off.
+    /// min(1, luminance / this), then divided by it (docs/techniques.md, "Shadow culling"); 0: off.
     pub shadow_cull: f32,
     /// Control variates for diffuse light samples (off: none).
     pub control_variates: ControlVariates,
@@ -244,7 +245,8 @@ pub struct RenderSettings {
     /// Read the film back after every pass and evaluate it (implied by `reference`).
     pub evaluate_passes: bool,
     /// Firefly clamp: the most luminance one camera sample's direct lighting may have (scaled
-    /// down, hue kept, above it). None: off, the default. It biases the image (TECHNIQUES 7.6).
+    /// down, hue kept, above it). None: off, the default. It biases the image (docs/techniques.md,
+    /// "Non-finite samples and the firefly clamp").
     pub clamp: Option<f32>,
     /// Set it (from another thread or a signal handler) to stop the render after the current
     /// round of dispatches: the output then holds the samples done so far (at least one per

@@ -3,9 +3,9 @@
 //! lobes) lit, without occlusion, by lights on its front side. Each pixel averages S×S stratified
 //! positions of the box pixel filter that `primary.comp` integrates.
 //!
-//! Irradiance formulas (TECHNIQUES.md §5): sphere and sun cone by Snyder's formula with the horizon
-//! crossing (§5.3); rects and emissive triangles by the Lambert polygon formula clipped at the
-//! horizon (§5.4); a delta sun as E⊥ max(0, n·s); a constant dome as π L; a
+//! Irradiance formulas (docs/techniques.md, "Analytic unshadowed irradiance"): sphere and sun cone
+//! by Snyder's formula with the horizon crossing; rects and emissive triangles by the Lambert
+//! polygon formula clipped at the horizon; a delta sun as E⊥ max(0, n·s); a constant dome as π L; a
 //! textured dome by Gauss-Legendre quadrature over the cells of its bilinear interpolant. These are
 //! independent of the GLSL (which samples; it never evaluates these integrals for the image).
 //!
@@ -386,7 +386,8 @@ fn ray_triangle(o: DVec3, d: DVec3, t: &[DVec3; 3]) -> Option<f64> {
 }
 
 /// E / L of a uniform spherical cap whose axis makes cosθ = `ct` with the normal and whose angular
-/// radius σ has sin²σ = `s2`, the horizon crossing included (Snyder 1996; TECHNIQUES.md §5.3).
+/// radius σ has sin²σ = `s2`, the horizon crossing included (Snyder 1996; docs/techniques.md,
+/// "Analytic unshadowed irradiance").
 pub fn sphere_irradiance(ct: f64, s2: f64) -> f64 {
     if ct * ct >= s2 {
         return PI * s2 * ct.max(0.0);
@@ -399,8 +400,9 @@ pub fn sphere_irradiance(ct: f64, s2: f64) -> f64 {
 }
 
 /// E / L at a point with normal n of a uniform planar polygon (vertices relative to the point,
-/// either winding), clipped at n's horizon: Lambert's formula with atan2 edge angles (TECHNIQUES
-/// §5.4). Which side emits is the caller's business.
+/// either winding), clipped at n's horizon: Lambert's formula with atan2 edge angles
+/// (docs/techniques.md, "Analytic unshadowed irradiance"). Which side emits is the caller's
+/// business.
 pub fn polygon_irradiance(n: DVec3, verts: &[DVec3]) -> f64 {
     let mut clipped = Vec::with_capacity(verts.len() + 1);
     for i in 0..verts.len() {
@@ -443,7 +445,8 @@ fn emitter_irradiance(corners: &[DVec3], x: DVec3, n: DVec3, two_sided: bool) ->
 }
 
 /// E / L at a point with normal n of a uniform disk (centre c relative to the point, unit normal
-/// nd, radius r): the closed-form vector irradiance of TECHNIQUES §5.5, valid while the whole disk
+/// nd, radius r): the closed-form vector irradiance (docs/techniques.md,
+/// "Analytic unshadowed irradiance"), valid while the whole disk
 /// is above n's horizon (an error otherwise: no closed form). One-sided disks emit toward nd.
 pub fn disk_irradiance(
     c: DVec3,
@@ -478,7 +481,7 @@ pub fn disk_irradiance(
 
 /// ∫ T(ω) max(0, n·ω) dω of a dome map T as the renderer reads it under `convention`
 /// (src/scene/dome_map.rs), by 6-point Gauss-Legendre in map coordinates on a 4 x 4 split of every
-/// sampling cell (src/render/dome.rs): the splits fall on the texel centres, where a bilinear
+/// sampling cell (src/gpu_scene/dome.rs): the splits fall on the texel centres, where a bilinear
 /// lookup has its kinks. Returns RGB.
 pub fn dome_irradiance_quadrature(
     t: &Texture,

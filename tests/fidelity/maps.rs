@@ -1,4 +1,4 @@
-//! Issue 16, conventions 5 and 6: texture filter and wrap modes, and the dome map conventions of
+//! Conventions: texture filter and wrap modes, and the dome map conventions of
 //! illum, Mitsuba 3 and pbrt-v4, against their documented mappings (f64 references in
 //! src/scene/dome_map.rs and `Texture::lookup`).
 
@@ -22,7 +22,7 @@ fn dome_json(convention: &str, rotation: f64, camera: &str) -> String {
     )
 }
 
-/// Issue 16, convention 6: each dome convention puts a marked texel where its documentation says
+/// Convention: each dome convention puts a marked texel where its documentation says
 /// (docs/scene-format.md): a camera aimed at the texel's centre, as the documented formulas place
 /// it, sees it; aimed at the next texel's centre, it does not.
 #[test]
@@ -97,7 +97,7 @@ fn each_dome_convention_puts_a_marked_texel_where_documented() {
     assert_no_validation_messages(&ctx);
 }
 
-/// Issue 16, convention 6: under every convention (and the texture's filter and wrap modes), a
+/// Convention: under every convention (and the texture's filter and wrap modes), a
 /// diffuse floor lit by a dome map with light sampling alone matches the float64 quadrature of
 /// the documented mapping (src/stress/closed_form.rs): the sampling tables and pdfs follow the
 /// lookup, with no part of the map left unsampled.
@@ -178,7 +178,7 @@ fn dome_maps_light_a_floor_as_the_quadrature_says_under_every_convention() {
     assert_no_validation_messages(&ctx);
 }
 
-/// Issue 16, convention 5: texture filter and wrap modes, seen directly on an emissive quad whose
+/// Convention: texture filter and wrap modes, seen directly on an emissive quad whose
 /// uvs run from u = -1 to u = 2, against the f64 reference lookup (`Texture::lookup`). Pixels
 /// where the lookup is not linear across the pixel (a texel edge for nearest, a texel centre for
 /// bilinear) are left out; elsewhere the pixel mean is the lookup at its centre, exactly.

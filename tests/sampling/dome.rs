@@ -16,7 +16,7 @@ fn texture(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> Vec4) -> illum::s
     illum::scene::Texture::new(name, w, h, texels)
 }
 
-/// Cell-aligned bins (`sub` × `sub` per sampling cell of src/render/dome.rs) in map coordinates:
+/// Cell-aligned bins (`sub` × `sub` per sampling cell of src/gpu_scene/dome.rs) in map coordinates:
 /// the sampler's density is constant in each, so the quadrature is exact.
 fn dome_domain(conv: DomeConvention, w: u32, h: u32, sub: usize, rot_deg: f64) -> Domain {
     let (cw, ch) = dome::cells(conv, w, h);

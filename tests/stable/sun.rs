@@ -16,7 +16,7 @@ fn sun_cone_is_stable() {
     let mut worst_naive_om = 0.0f64;
     for theta_deg in log_space(1e-4, 15.0, 49) {
         let theta = theta_deg.to_radians();
-        // What src/render/upload.rs stores: 1 - cos(theta) = 2 sin^2(theta / 2) in f64, then f32.
+        // What src/gpu_scene/mod.rs stores: 1 - cos(theta) = 2 sin^2(theta / 2) in f64, then f32.
         // The naive f32 1 - cos(theta) is 0 (a delta sun) below ~0.02 degree.
         let om = s32(2.0 * (0.5 * theta).sin().powi(2));
         let exact = 2.0 * (0.5 * theta).sin().powi(2);

@@ -1,8 +1,8 @@
-//! Indirect lighting (TECHNIQUES.md §6): the seed's split into direct lighting, indirect diffuse
-//! through the radiosity cache and the reflection integrator (`full`, glsl/indirect/full.comp),
-//! and a brute-force path tracer to check it against (`path`, glsl/indirect/path.comp). Both
-//! light their camera hits exactly as the direct integrator does and add the AOV planes
-//! Direct, IndirectDiffuse and Reflection, whose sum is the beauty.
+//! Indirect lighting (docs/techniques.md, "Indirect lighting: the three integrators"): the seed's
+//! split into direct lighting, indirect diffuse through the radiosity cache and the reflection
+//! integrator (`full`, glsl/indirect/full.comp), and a brute-force path tracer to check it against
+//! (`path`, glsl/indirect/path.comp). Both light their camera hits exactly as the direct integrator
+//! does and add the AOV planes Direct, IndirectDiffuse and Reflection, whose sum is the beauty.
 
 mod radiosity;
 

@@ -1,7 +1,7 @@
-//! The radiosity cache (TECHNIQUES.md §6.2–6.4): the outgoing diffuse radiance B = ρ/π·E of
-//! surfaces, cached in a world-space hashed grid for the indirect-diffuse rays of the full
-//! integrator (glsl/indirect/indirect.glsl reads it; the update pass of glsl/indirect/full.comp,
-//! the film pass's kernel, writes its samples).
+//! The radiosity cache (docs/techniques.md, "The radiosity cache"): the outgoing diffuse
+//! radiance B = ρ/π·E of surfaces, cached in a world-space hashed grid for the indirect-diffuse
+//! rays of the full integrator (glsl/indirect/indirect.glsl reads it; the update pass of
+//! glsl/indirect/full.comp, the film pass's kernel, writes its samples).
 //!
 //! Why a hashed grid, and why its table is built on the host:
 //! - A hashed grid needs only a hit's position and normal, so both trace paths and every shape
@@ -19,7 +19,7 @@
 //!   recently updated cells are evicted first.
 //!
 //! Generations. A record's value reads the table of the previous generation (one bounce each:
-//! a Jacobi iteration of the radiosity equation, §6.3). Before the first sample, `warmup` rounds
+//! a Jacobi iteration of the radiosity equation). Before the first sample, `warmup` rounds
 //! each publish a generation; then the update samples that belong to sample indices [2^(g-1),
 //! 2^g) form generation g + 1, published when sample 2^g begins. The table a sample sees is
 //! thus a function of its index alone, so a render split into sample ranges or crops merges
@@ -30,7 +30,7 @@
 //! the render): what a render session does, since its passes run in the host's command buffers
 //! and cannot hand records back to the host mid-frame (src/render/session.rs).
 //!
-//! Bias (§6.4): a lag of ρ^(rounds) of the indirect light after `rounds` generations (the
+//! Bias: a lag of ρ^(rounds) of the indirect light after `rounds` generations (the
 //! warm-up takes enough that ρ_max^warmup ≤ 1e-3, at most 64), plus the blur of a cell, which
 //! the cosine-weighted bounce that reads it integrates again. The cache never serves the camera
 //! hit or direct light: reads happen only at the hit of a diffuse bounce, and only where the

@@ -38,11 +38,11 @@
 //! decoding ALU; 8-wide quantized nodes would fetch more words per ray than 4-wide (about 24 words
 //! per node at roughly 9 to 10 visits against 14 at 13).
 //!
-//! Since issue 15 item 5 the kernels read nodes, triangles (40 bytes: the vertices and the mesh
+//! The kernels read nodes, triangles (40 bytes: the vertices and the mesh
 //! index, no padding) and instances as 64-bit words, two fields per load: 1.4-1.5x rays per
 //! CPU-second where lavapipe loads lane by lane (Mesa 22; Mesa 25 without AVX-512), the same with
 //! AVX-512 gathers, 12 % less BLAS memory. Figures, profile and what was dropped:
-//! docs/performance-kernels.md, "Trace throughput (issue 15 item 5)".
+//! docs/performance-kernels.md, "Trace throughput".
 
 pub mod builder;
 pub mod nodes;
