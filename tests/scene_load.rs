@@ -356,3 +356,29 @@ fn rotate_applies_x_then_y_then_z() {
     let y = s.instances[0].transform.transform_vector3(DVec3::Y);
     assert!(y.abs_diff_eq(DVec3::X, 1e-12), "{y}");
 }
+
+/// A texture's first bytes are checked before the file is read: a 1 GiB sparse file named .png
+/// was read whole (1.05 GB resident) before its decoder refused it; a PNG named .jpg is named.
+#[test]
+fn texture_files_are_sniffed_before_they_are_read() {
+    let dir = temp_dir("sniff");
+    let big = std::fs::File::create(dir.join("huge.png")).unwrap();
+    big.set_len((1 << 30) - 1).unwrap();
+    let png = dir.join("img.png");
+    image::RgbImage::new(2, 2).save(&png).unwrap();
+    std::fs::copy(&png, dir.join("png.jpg")).unwrap();
+    for (file, needle) in [
+        ("huge.png", "no image file of a known kind"),
+        ("png.jpg", "Png data, not what its name says"),
+    ] {
+        let body = format!(
+            r#""textures": {{"t": {{"file": "{file}"}}}}, "lights": {{"sky": {{"dome": {{}}}}}}"#
+        );
+        let e = load_in(&dir, &body).expect_err(file).to_string();
+        assert!(e.contains("textures.t.file") && e.contains(file), "{e}");
+        assert!(e.contains(needle), "{e}");
+    }
+    let ok = r#""textures": {"t": {"file": "img.png"}}, "lights": {"sky": {"dome": {}}}"#;
+    load_in(&dir, ok).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -312,6 +312,18 @@ pub(crate) fn read_uri(uri: &str, dir: &Path, gfile: &str, field: &str) -> Resul
         ));
     }
     let rel = percent_decode(uri);
+    // glTF URIs are relative to the file (glTF 2.0, 2.8): an absolute path (`/etc/passwd`)
+    // would read whatever it names.
+    if Path::new(&rel).has_root() {
+        return Err(SceneError::unsupported(
+            gfile,
+            field,
+            format!(
+                "URIs are relative to the glTF file, got the absolute path {}",
+                quoted(uri)
+            ),
+        ));
+    }
     read_capped(&dir.join(&rel), MAX_ASSET_FILE_BYTES).map_err(|e| SceneError::FileRead {
         file: gfile.to_owned(),
         field: field.to_owned(),
@@ -511,6 +523,10 @@ mod tests {
             e.to_string(),
             "a.gltf: buffers[0].uri: only base64 data: URIs are supported"
         );
+        let e = read_uri("/etc/passwd", dir, "a.gltf", f).unwrap_err();
+        assert!(e.to_string().contains("absolute path"), "{e}");
+        let e = read_uri("%2Fetc/passwd", dir, "a.gltf", f).unwrap_err();
+        assert!(e.to_string().contains("absolute path"), "{e}");
         let e = read_uri("https://example.com/a.bin", dir, "a.gltf", f).unwrap_err();
         assert!(
             e.to_string()

@@ -269,6 +269,22 @@ impl Builder<'_> {
             )
         })?;
         let path = self.base_dir.join(&def.file);
+        // The first bytes first: a huge file that is no image fails before it is read whole.
+        let head = read_head(&path)
+            .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
+        match ImageKind::sniff(&head) {
+            Some(k) if k == kind => {}
+            found => {
+                let what = found.map_or("no image file of a known kind".to_string(), |k| {
+                    format!("{k:?} data, not what its name says")
+                });
+                return Err(self.ctx.err(
+                    &field,
+                    quoted(&def.file),
+                    &format!("its first bytes are {what} (PNG, JPEG, OpenEXR or Radiance HDR)"),
+                ));
+            }
+        }
         let bytes = read_capped(&path, MAX_ASSET_FILE_BYTES)
             .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
         let srgb = def.srgb.unwrap_or(kind.srgb_by_default());
@@ -609,4 +625,12 @@ pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     let mut scene = build(&file, &origin, base)?;
     scene.source = Some(path.to_path_buf());
     Ok(scene)
+}
+
+/// The first 16 bytes of a file (fewer if it is shorter).
+fn read_head(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(16);
+    std::fs::File::open(path)?.take(16).read_to_end(&mut head)?;
+    Ok(head)
 }
