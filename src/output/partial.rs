@@ -177,7 +177,12 @@ pub fn write_partial(
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
-    let image = Image::from_layer(layer);
+    let mut image = Image::from_layer(layer);
+    // OpenEXR's meaning, as Nuke and exrinfo read it: the data window is the crop in the
+    // frame's pixel coordinates, the display window the whole frame.
+    image.layer_data.attributes.layer_position = Vec2(w.x0 as i32, w.y0 as i32);
+    image.attributes.display_window =
+        IntegerBounds::from_dimensions((info.frame.0 as usize, info.frame.1 as usize));
     super::write_atomically(path, |tmp| image.write().to_file(tmp).map_err(write_err))
 }
 
@@ -254,10 +259,13 @@ fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> R
         setup_seconds: num("illum.setupSeconds")?,
         aov_planes,
     };
-    if size != Vec2(window.width() as usize, window.height() as usize) {
+    let position = attributes.layer_position;
+    if size != Vec2(window.width() as usize, window.height() as usize)
+        || position != Vec2(window.x0 as i32, window.y0 as i32)
+    {
         return Err(bad(format!(
-            "data window {}x{} does not match illum.crop {window}",
-            size.0, size.1
+            "data window {}x{} at ({}, {}) does not match illum.crop {window}",
+            size.0, size.1, position.0, position.1
         )));
     }
     Ok(info)

@@ -188,6 +188,17 @@ impl FilmSums {
         }
     }
 
+    /// The fixed-point sums of every sample this job rendered: borrowed when it has no boundary
+    /// blocks (a render in one piece), so that resolving does not copy them (16 bytes a channel
+    /// and pixel).
+    pub fn all_sums(&self) -> std::borrow::Cow<'_, [i128]> {
+        if self.boundary.is_empty() {
+            std::borrow::Cow::Borrowed(&self.sums)
+        } else {
+            std::borrow::Cow::Owned(self.with_boundary().sums)
+        }
+    }
+
     /// The sums with the boundary blocks added: every sample this job rendered.
     pub fn with_boundary(&self) -> FilmSums {
         let mut all = FilmSums {

@@ -393,17 +393,13 @@ impl Renderer {
                 };
                 if evaluate {
                     // Reads the unfinished block without moving it: the block grid stays fixed.
-                    let mut peek = sums.with_boundary();
+                    let mut peek = sums.all_sums();
                     if (first + done) % FILM_BLOCK != 0 && first + done != last {
-                        peek.add_block(&film::download_window(ctx, device_film, w, window)?);
+                        let block = film::download_window(ctx, device_film, w, window)?;
+                        film::add_block(peek.to_mut(), &block, sums.channels());
                     }
-                    let r = film::resolve(
-                        &peek.sums,
-                        &aov_planes,
-                        window.width(),
-                        window.height(),
-                        done,
-                    );
+                    let r =
+                        film::resolve(&peek, &aov_planes, window.width(), window.height(), done);
                     evaluate_pass(&mut report, &r, settings.reference.as_deref());
                     passes.push(report);
                     last_resolved = Some(r);
@@ -420,7 +416,7 @@ impl Renderer {
             let resolved = match last_resolved {
                 Some(r) if r.spp == done => r,
                 _ => film::resolve(
-                    &sums.with_boundary().sums,
+                    &sums.all_sums(),
                     &aov_planes,
                     window.width(),
                     window.height(),
