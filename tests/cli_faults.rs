@@ -7,22 +7,10 @@
 
 mod common;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::Duration;
 
-fn illum() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_illum"));
-    c.env("ILLUM_VALIDATION", "1");
-    c
-}
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = illum().args(args).output().expect("running illum");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{illum_cli as run, illum_command as illum};
 
 fn fresh_dir(name: &str) -> PathBuf {
     let d = common::temp_path(name);

@@ -3,22 +3,10 @@
 
 mod common;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-fn illum() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_illum"));
-    c.env("ILLUM_VALIDATION", "1");
-    c
-}
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = illum().args(args).output().expect("running illum");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::{illum_cli as run, illum_command as illum};
 
 /// Fails when `dir` holds a temporary file of illum's.
 fn assert_no_temp_files(dir: &Path) {

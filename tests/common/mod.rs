@@ -267,13 +267,16 @@ pub const SMALL_SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at":
     "lights": {"key": {"rect": {"center": [1, 2, 1], "normal": [-0.4, -1, -0.4], "size": [0.8, 0.8]}, "intensity": 6},
                "sky": {"dome": {}, "color": [0.2, 0.3, 0.4]}}}"#;
 
+/// The illum binary, with validation on.
+pub fn illum_command() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_illum"));
+    c.env("ILLUM_VALIDATION", "1");
+    c
+}
+
 /// Runs the illum binary with validation on: (exit code, stderr).
 pub fn illum_cli(args: &[&str]) -> (i32, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_illum"))
-        .args(args)
-        .env("ILLUM_VALIDATION", "1")
-        .output()
-        .expect("running illum");
+    let out = illum_command().args(args).output().expect("running illum");
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stderr).into_owned(),
