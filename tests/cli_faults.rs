@@ -58,6 +58,16 @@ fn finish(child: Child) -> (i32, String) {
     )
 }
 
+/// A long render into `out`, sent `sig` 1.5 s in and again `gap_ms` later: (exit status, stderr).
+fn signal_twice(out: &Path, width: &str, sig: i32, gap_ms: u64) -> (i32, String) {
+    let child = long_render(out, &["--width", width]);
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, sig);
+    std::thread::sleep(Duration::from_millis(gap_ms));
+    signal(&child, sig);
+    finish(child)
+}
+
 /// `timeout` sends SIGTERM to its child and then to the child's process group, microseconds
 /// apart: that was taken as "quit at once" and lost the image (8 of 12 runs with the signals 1 ms
 /// apart). Now a repeat within 200 ms is the same request, and SIGTERM never quits at once.
@@ -66,12 +76,7 @@ fn repeated_sigterms_keep_the_image() {
     let dir = fresh_dir("sigterm-twice");
     for (k, gap_ms) in [0u64, 1, 5, 400].into_iter().enumerate() {
         let out = dir.join(format!("t{k}.exr"));
-        let child = long_render(&out, &["--width", "32"]);
-        std::thread::sleep(Duration::from_millis(1500));
-        signal(&child, libc::SIGTERM);
-        std::thread::sleep(Duration::from_millis(gap_ms));
-        signal(&child, libc::SIGTERM);
-        let (code, err) = finish(child);
+        let (code, err) = signal_twice(&out, "32", libc::SIGTERM, gap_ms);
         assert_eq!(code, 143, "gap {gap_ms} ms: stderr:\n{err}");
         let img = illum::output::read_exr(&out).unwrap_or_else(|e| panic!("gap {gap_ms} ms: {e}"));
         assert_eq!(img.attribute("illum.interrupted"), Some("true"));
@@ -86,12 +91,7 @@ fn a_second_ctrl_c_leaves_a_whole_image_or_none() {
     let dir = fresh_dir("sigint-twice");
     for (k, gap_ms) in [250u64, 300, 400, 600].into_iter().enumerate() {
         let out = dir.join(format!("i{k}.png"));
-        let child = long_render(&out, &["--width", "512"]);
-        std::thread::sleep(Duration::from_millis(1500));
-        signal(&child, libc::SIGINT);
-        std::thread::sleep(Duration::from_millis(gap_ms));
-        signal(&child, libc::SIGINT);
-        let (code, err) = finish(child);
+        let (code, err) = signal_twice(&out, "512", libc::SIGINT, gap_ms);
         let exr = out.with_extension("exr");
         match code {
             130 => {

@@ -114,7 +114,8 @@ fn fuzz(name: &str, seeds: &[Vec<u8>], load: &dyn Fn(&[u8]) -> bool) -> (usize, 
     let mut rng = Rng(fuzz_seed().wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     let (start, budget) = (Instant::now(), budget());
     let (mut tried, mut loaded) = (0, 0);
-    let mut check = |input: &[u8], what: &str| {
+    // `what` names the input only when it fails: no string is built per input.
+    let mut check = |input: &[u8], what: &dyn Fn() -> String| {
         let t = Instant::now();
         let r = catch_unwind(AssertUnwindSafe(|| load(input)));
         let took = t.elapsed();
@@ -123,23 +124,28 @@ fn fuzz(name: &str, seeds: &[Vec<u8>], load: &dyn Fn(&[u8]) -> bool) -> (usize, 
             Err(_) => {
                 let path = common::temp_path(&format!("fuzz-{name}-panic"));
                 std::fs::write(&path, input).unwrap();
-                panic!("{name}: {what} panicked; input kept in {}", path.display());
+                panic!(
+                    "{name}: {} panicked; input kept in {}",
+                    what(),
+                    path.display()
+                );
             }
         }
         assert!(
             took < Duration::from_secs(5),
-            "{name}: {what} took {took:?} (a hang?)"
+            "{name}: {} took {took:?} (a hang?)",
+            what()
         );
         tried += 1;
     };
     for (k, r) in regressions.iter().enumerate() {
-        check(r, &format!("kept input {k}"));
+        check(r, &|| format!("kept input {k}"));
     }
     let mut i = 0u64;
     while start.elapsed() < budget {
         let seed = &seeds[rng.below(seeds.len())];
         let input = mutate(&mut rng, seed);
-        check(&input, &format!("seed {} iteration {i}", fuzz_seed()));
+        check(&input, &|| format!("seed {} iteration {i}", fuzz_seed()));
         i += 1;
     }
     eprintln!(

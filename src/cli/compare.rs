@@ -182,13 +182,10 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             ("strip", strip_path.as_path()),
         ])
         .collect();
-    let inputs: Vec<(&str, &std::path::Path)> = [
-        a.scene.scene.as_deref().map(|p| ("scene", p)),
-        a.reference.as_deref().map(|p| ("reference", p)),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    let inputs = super::named([
+        ("scene", a.scene.scene.as_deref()),
+        ("reference", a.reference.as_deref()),
+    ]);
     check_outputs(&outputs, &inputs)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a

@@ -26,13 +26,10 @@ pub struct MergeArgs {
 
 pub fn run(a: &MergeArgs) -> Result<()> {
     let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
-    let outputs: Vec<(&str, &std::path::Path)> = [
-        Some(("image", exr_path.as_path())),
-        png_path.as_deref().map(|p| ("PNG", p)),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    let outputs = super::named([
+        ("image", Some(exr_path.as_path())),
+        ("PNG", png_path.as_deref()),
+    ]);
     let inputs: Vec<(&str, &std::path::Path)> =
         a.parts.iter().map(|p| ("part", p.as_path())).collect();
     check_outputs(&outputs, &inputs)?;

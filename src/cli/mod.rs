@@ -216,6 +216,17 @@ impl IntegratorArgs {
     }
 }
 
+/// The paths that are given, each with what it is ("image", "scene", ...): the lists
+/// [`check_outputs`] takes.
+pub fn named<'a, const N: usize>(
+    paths: [(&'a str, Option<&'a Path>); N],
+) -> Vec<(&'a str, &'a Path)> {
+    paths
+        .into_iter()
+        .filter_map(|(what, p)| p.map(|p| (what, p)))
+        .collect()
+}
+
 /// Checks every output path before any work (see [`crate::output::check_writable`]), and that no
 /// output would replace an input or another output. Each path comes with what it is ("image",
 /// "report", "scene", "reference", ...), for the error.

@@ -68,12 +68,7 @@ pub fn plan(n: u32, split: Split, spp: u32, width: u32, height: u32) -> Result<V
     if n == 0 || spp == 0 || width == 0 || height == 0 {
         bail!("cannot split a {width}x{height} image of {spp} spp into {n} parts");
     }
-    if spp > crate::render::film::MAX_SPP {
-        bail!(
-            "--spp {spp}: an image has at most {} samples per pixel",
-            crate::render::film::MAX_SPP
-        );
-    }
+    crate::render::film::check_spp(spp).map_err(|e| anyhow::anyhow!("--spp: {e}"))?;
     let full = Window::full(width, height);
     match split {
         Split::Samples => {

@@ -98,13 +98,10 @@ fn parse_range(s: &str) -> std::result::Result<(u32, u32), String> {
 impl RenderArgs {
     /// The files a render reads, which no output may replace.
     fn inputs(&self) -> Vec<(&str, &Path)> {
-        [
-            self.scene.scene.as_deref().map(|p| ("scene", p)),
-            self.reference.as_deref().map(|p| ("reference", p)),
-        ]
-        .into_iter()
-        .flatten()
-        .collect()
+        super::named([
+            ("scene", self.scene.scene.as_deref()),
+            ("reference", self.reference.as_deref()),
+        ])
     }
 }
 
@@ -135,15 +132,12 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             p.display()
         );
     }
-    let outputs: Vec<(&str, &Path)> = [
-        Some(("image", exr_path.as_path())),
-        png_path.as_deref().map(|p| ("PNG", p)),
-        a.report.as_deref().map(|p| ("report", p)),
-        a.report_plot.as_deref().map(|p| ("plot", p)),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    let outputs = super::named([
+        ("image", Some(exr_path.as_path())),
+        ("PNG", png_path.as_deref()),
+        ("report", a.report.as_deref()),
+        ("plot", a.report_plot.as_deref()),
+    ]);
     check_outputs(&outputs, &a.inputs())?;
     let scene = a.scene.load()?;
     let (w, h) = (scene.camera.width, scene.camera.height);

@@ -154,22 +154,20 @@ struct Encoded {
 fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
     use std::f64::consts::PI;
     match *g {
-        ShapeGeometry::Sphere { center, radius } => Encoded {
-            shape_kind: SHAPE_SPHERE,
-            light_kind: LIGHT_SPHERE,
-            light_feature: FEATURE_SPHERE_LIGHTS,
-            p0: v4(center - origin, radius),
-            p1: [0.0; 3],
-            // The origin's signed distance to the surface and to the centre, in double precision:
-            // intersect_sphere's exact start (glsl/shared/shapes.glsl).
-            p2: [
-                ((center - origin).length() - radius) as f32,
-                (center - origin).length() as f32,
-                0.0,
-                0.0,
-            ],
-            area: (4.0 * PI * radius * radius) as f32,
-        },
+        ShapeGeometry::Sphere { center, radius } => {
+            let dist = (center - origin).length();
+            Encoded {
+                shape_kind: SHAPE_SPHERE,
+                light_kind: LIGHT_SPHERE,
+                light_feature: FEATURE_SPHERE_LIGHTS,
+                p0: v4(center - origin, radius),
+                p1: [0.0; 3],
+                // The origin's signed distance to the surface and to the centre, in double precision:
+                // intersect_sphere's exact start (glsl/shared/shapes.glsl).
+                p2: [(dist - radius) as f32, dist as f32, 0.0, 0.0],
+                area: (4.0 * PI * radius * radius) as f32,
+            }
+        }
         ShapeGeometry::Rect { center, u, v } => Encoded {
             shape_kind: SHAPE_RECT,
             light_kind: LIGHT_RECT,

@@ -264,9 +264,6 @@ pub fn check_writable(path: &Path) -> Result<(), OutputError> {
     if path.as_os_str().is_empty() {
         return Err(fail("the path is empty".into()));
     }
-    if path.is_dir() {
-        return Err(fail("it is a folder; name a file in it".into()));
-    }
     let target = resolve_target(path)?;
     let dir = folder_of(&target);
     match std::fs::metadata(dir) {

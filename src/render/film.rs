@@ -30,6 +30,20 @@ pub const FILM_BLOCK: u32 = 256;
 /// The most samples per pixel an image may have: sample indices are 32-bit, and the end of the
 /// last block, a multiple of [`FILM_BLOCK`], must be one too (2^32 - 256).
 pub const MAX_SPP: u32 = u32::MAX - (FILM_BLOCK - 1);
+
+/// Why `spp` cannot be an image's sample count, if it cannot.
+pub fn check_spp(spp: u32) -> std::result::Result<(), String> {
+    if spp == 0 {
+        Err("samples per pixel must be at least 1".into())
+    } else if spp > MAX_SPP {
+        Err(format!(
+            "samples per pixel must be at most {MAX_SPP} (32-bit sample indices in blocks of \
+             {FILM_BLOCK}), got {spp}"
+        ))
+    } else {
+        Ok(())
+    }
+}
 /// Floats per pixel in the device film (FilmPixel).
 pub const FILM_CHANNELS: usize = 24;
 /// Floats per AOV plane and pixel (a vec4 of the "aovs" buffer: rgb sums, w unused).

@@ -265,19 +265,7 @@ pub struct RenderSettings {
 impl RenderSettings {
     /// Checks the settings for an image of `width` x `height` pixels.
     pub fn check(&self, width: u32, height: u32) -> Result<()> {
-        if self.spp == 0 {
-            return Err(Error::Invalid(
-                "samples per pixel must be at least 1".into(),
-            ));
-        }
-        if self.spp > super::film::MAX_SPP {
-            return Err(Error::Invalid(format!(
-                "samples per pixel must be at most {} (32-bit sample indices in blocks of {}), got {}",
-                super::film::MAX_SPP,
-                super::film::FILM_BLOCK,
-                self.spp
-            )));
-        }
+        super::film::check_spp(self.spp).map_err(Error::Invalid)?;
         if let Some(t) = self.time
             && !(t.is_finite() && t > 0.0)
         {

@@ -97,6 +97,28 @@ fn params(threads: usize) -> BuildParams {
     }
 }
 
+/// A mesh's tree over its triangles' boxes: SAH (`slack` None), or within `slack` levels of a
+/// balanced tree and collapsed two levels a wide node, so that a walk's stack stays bounded.
+/// Returns the binary tree, its wide nodes, the root link and the stack a walk needs.
+fn mesh_tree(
+    boxes: &[Aabb],
+    threads: usize,
+    slack: Option<u32>,
+) -> (builder::BinaryBvh, Vec<BvhNode>, u32, u32) {
+    let base = params(threads);
+    let max_depth = slack.map_or(u32::MAX, |k| {
+        builder::balanced_depth(boxes.len(), base.max_leaf).saturating_add(k)
+    });
+    let bin = builder::build(boxes, &BuildParams { max_depth, ..base });
+    let open = match slack {
+        None => nodes::Open::LargestArea,
+        Some(_) => nodes::Open::Shallowest,
+    };
+    let mut nodes = Vec::new();
+    let (root, need) = nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open);
+    (bin, nodes, root, need)
+}
+
 fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize, slack: Option<u32>) -> MeshBvh {
     let m = scene.meshes[mesh];
     let pos = &scene.positions[m.first_vertex as usize..(m.first_vertex + m.vertex_count) as usize];
@@ -107,17 +129,7 @@ fn build_mesh(scene: &GpuScene, mesh: usize, threads: usize, slack: Option<u32>)
     let boxes: Vec<Aabb> = (0..m.triangle_count as usize)
         .map(|t| Aabb::from_points(&corners(t)))
         .collect();
-    let base = params(threads);
-    let max_depth = slack.map_or(u32::MAX, |k| {
-        builder::balanced_depth(boxes.len(), base.max_leaf).saturating_add(k)
-    });
-    let bin = builder::build(&boxes, &BuildParams { max_depth, ..base });
-    let mut nodes = Vec::new();
-    let open = match slack {
-        None => nodes::Open::LargestArea,
-        Some(_) => nodes::Open::Shallowest,
-    };
-    let (root, need) = nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open);
+    let (bin, nodes, root, need) = mesh_tree(&boxes, threads, slack);
     let triangles = bin
         .order
         .iter()
@@ -458,23 +470,10 @@ impl BvhScene {
 mod tests {
     use super::*;
 
-    /// The stack a walk of a mesh's tree needs, built from `boxes` with `slack` (build_mesh).
+    /// The stack a walk of a mesh's tree needs, and its binary depth (build_mesh's tree).
     fn need(boxes: &[Aabb], slack: Option<u32>) -> (u32, u32) {
-        let base = params(2);
-        let max_depth = slack.map_or(u32::MAX, |k| {
-            builder::balanced_depth(boxes.len(), base.max_leaf).saturating_add(k)
-        });
-        let bin = builder::build(boxes, &BuildParams { max_depth, ..base });
-        let depth = binary_depth(&bin, 0);
-        let mut nodes = Vec::new();
-        let open = match slack {
-            None => nodes::Open::LargestArea,
-            Some(_) => nodes::Open::Shallowest,
-        };
-        (
-            nodes::collapse_as(&bin, &mut nodes, &|_, _| 0, open).1,
-            depth,
-        )
+        let (bin, _, _, need) = mesh_tree(boxes, 2, slack);
+        (need, binary_depth(&bin, 0))
     }
 
     fn binary_depth(bin: &builder::BinaryBvh, i: u32) -> u32 {
