@@ -9,7 +9,7 @@
 
 #![allow(clippy::missing_safety_doc)] // the safety rules are in include/illum.h, for C readers
 
-use crate::error::Error;
+use crate::error::{Error, GpuError};
 use crate::render::{PreparedScene, RenderSession, Renderer};
 use crate::scene::Scene;
 use crate::vk::{Context, ExternalDevice};
@@ -56,14 +56,10 @@ fn set_error(msg: String) {
 fn status_of(e: &Error) -> IllumStatus {
     match e {
         Error::Invalid(m) if m.ends_with(NULL_SUFFIX) => IllumStatus::ErrorNull,
-        Error::Unsupported { .. } | Error::NoDevice(_) | Error::MissingLayer(_) => {
-            IllumStatus::ErrorUnsupported
-        }
-        Error::Vulkan { .. }
-        | Error::DeviceLost { .. }
-        | Error::OutOfMemory { .. }
-        | Error::Allocation { .. }
-        | Error::Loader(_) => IllumStatus::ErrorVulkan,
+        Error::Gpu(
+            GpuError::Unsupported { .. } | GpuError::NoDevice(_) | GpuError::MissingLayer(_),
+        ) => IllumStatus::ErrorUnsupported,
+        Error::Gpu(_) => IllumStatus::ErrorVulkan,
         _ => IllumStatus::ErrorInvalid,
     }
 }
@@ -172,7 +168,7 @@ unsafe fn load_instance(
     // SAFETY: the host's loader entry point (or the system loader), with its own instance.
     unsafe {
         let entry = match get_instance_proc_addr {
-            None => ash::Entry::load().map_err(|e| Error::Loader(e.to_string()))?,
+            None => ash::Entry::load().map_err(|e| GpuError::Loader(e.to_string()))?,
             Some(get_instance_proc_addr) => ash::Entry::from_static_fn(ash::StaticFn {
                 get_instance_proc_addr,
             }),
@@ -197,9 +193,11 @@ pub unsafe extern "C" fn illum_requirements(
         let out = out.as_mut().ok_or_else(|| null("out"))?;
         let req = crate::vk::requirements(&l.instance, physical_device)?;
         let set = if ray_query != 0 {
-            req.ray_query.as_ref().ok_or_else(|| Error::Unsupported {
-                device: "the physical device".into(),
-                what: "it has no ray queries".into(),
+            req.ray_query.as_ref().ok_or_else(|| {
+                Error::Gpu(GpuError::Unsupported {
+                    device: "the physical device".into(),
+                    what: "it has no ray queries".into(),
+                })
             })?
         } else {
             &req.base
@@ -222,10 +220,10 @@ pub unsafe extern "C" fn illum_requirements(
             ray_query_available: u32::from(req.ray_query.is_some()),
         };
         if !req.missing.is_empty() {
-            return Err(Error::Unsupported {
+            return Err(Error::Gpu(GpuError::Unsupported {
                 device: "the physical device".into(),
                 what: format!("it lacks {}", req.missing.join(", ")),
-            });
+            }));
         }
         Ok(())
     })
@@ -294,9 +292,11 @@ pub unsafe extern "C" fn illum_context_from_external(
         let device = ash::Device::load(l.instance.fp_v1_0(), ext.device);
         let req = crate::vk::requirements(&l.instance, pd)?;
         let enabled = if ext.ray_query_enabled != 0 {
-            req.ray_query.clone().ok_or_else(|| Error::Unsupported {
-                device: "the physical device".into(),
-                what: "ray queries were enabled, but the device does not offer them".into(),
+            req.ray_query.clone().ok_or_else(|| {
+                Error::Gpu(GpuError::Unsupported {
+                    device: "the physical device".into(),
+                    what: "ray queries were enabled, but the device does not offer them".into(),
+                })
             })?
         } else {
             req.base.clone()

@@ -575,7 +575,7 @@ impl GpuScene {
             if data.is_empty() {
                 return Ok(None);
             }
-            ctx.upload(name, data, usage).map(Some)
+            Ok(Some(ctx.upload(name, data, usage)?))
         };
         let vertex_buffer = upload(
             "vertices",

@@ -133,6 +133,12 @@ pub struct ImageMetadata {
 
 /// Errors of this module. Every message names the file and includes the underlying cause, so
 /// printing the error with `{}` is enough.
+impl From<OutputError> for crate::Error {
+    fn from(e: OutputError) -> crate::Error {
+        crate::Error::Output(Box::new(e))
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     #[error("cannot write {}: the film is empty ({width}x{height})", .path.display())]

@@ -284,7 +284,7 @@ pub fn download_window(
 
 /// Clears the device film (and its AOV planes) for the next block.
 pub fn clear(ctx: &Context, film: DeviceFilm) -> Result<()> {
-    ctx.one_shot(|cmd| {
+    Ok(ctx.one_shot(|cmd| {
         // SAFETY: the film buffers are alive until the wait.
         unsafe {
             ctx.device
@@ -294,7 +294,7 @@ pub fn clear(ctx: &Context, film: DeviceFilm) -> Result<()> {
                     .cmd_fill_buffer(cmd, a.buffer, 0, ash::vk::WHOLE_SIZE, 0);
             }
         }
-    })
+    })?)
 }
 
 /// A film resolved from its sums after `spp` samples per pixel.

@@ -6,7 +6,7 @@ pub mod bvh;
 pub mod query;
 pub mod rayquery;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu_scene::GpuScene;
 use crate::layout::*;
 use crate::vk::{ComputePipeline, Context};
@@ -228,11 +228,13 @@ impl TraceMode {
                 Ok(TraceMode::RayQuery)
             }
             TraceMode::Auto => Ok(TraceMode::Bvh),
-            TraceMode::RayQuery if !ctx.ray_query() => Err(crate::error::Error::Unsupported {
-                device: ctx.info().name.clone(),
-                what: "--trace rayquery was asked for, but the device has no VK_KHR_ray_query"
-                    .into(),
-            }),
+            TraceMode::RayQuery if !ctx.ray_query() => {
+                Err(Error::Gpu(crate::vk::Error::Unsupported {
+                    device: ctx.info().name.clone(),
+                    what: "--trace rayquery was asked for, but the device has no VK_KHR_ray_query"
+                        .into(),
+                }))
+            }
             m => Ok(m),
         }
     }

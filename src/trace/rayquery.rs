@@ -2,7 +2,8 @@
 //! analytic shapes, a TLAS over the instances. Scratch addresses honour the device's
 //! minAccelerationStructureScratchOffsetAlignment; BLASes are compacted.
 
-use crate::error::{Error, Result, VkResultExt};
+use crate::error::{Error, Result};
+use crate::vk::VkResultExt;
 use crate::vk::{Buffer, Context, MemoryLocation};
 use ash::vk;
 use std::time::Instant;
@@ -63,9 +64,11 @@ pub struct RayQueryScene {
 }
 
 fn accel(ctx: &Context) -> Result<&ash::khr::acceleration_structure::Device> {
-    ctx.accel.as_ref().ok_or_else(|| Error::Unsupported {
-        device: ctx.info().name.clone(),
-        what: "it has no VK_KHR_acceleration_structure".into(),
+    ctx.accel.as_ref().ok_or_else(|| {
+        Error::Gpu(crate::vk::Error::Unsupported {
+            device: ctx.info().name.clone(),
+            what: "it has no VK_KHR_acceleration_structure".into(),
+        })
     })
 }
 

@@ -2,7 +2,7 @@
 //! sample batches) so that none runs long enough to trip a driver watchdog.
 
 use super::context::Context;
-use crate::error::{Result, VkResultExt};
+use super::error::{Result, VkResultExt};
 use ash::vk;
 
 impl Context {

@@ -1,8 +1,8 @@
 //! Instance, device and queue: created by illum, or borrowed from an application that embeds it.
 
 use super::devices::{DeviceInfo, describe, pick};
+use super::error::{Error, Result, VkResultExt};
 use super::memory::Allocator;
-use crate::error::{Error, Result, VkResultExt};
 use ash::vk;
 use std::ffi::{CStr, CString, c_void};
 use std::sync::{Arc, Mutex};

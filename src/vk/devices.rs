@@ -1,7 +1,7 @@
 //! Physical devices: what each offers (`illum devices`), and which one illum picks.
 
 use super::context::{create_instance, load_entry};
-use crate::error::{Error, Result, VkResultExt};
+use super::error::{Error, Result, VkResultExt};
 use ash::vk;
 use std::ffi::CStr;
 

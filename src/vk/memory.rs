@@ -1,7 +1,7 @@
 //! Buffers and their memory (gpu-allocator), with upload and download through staging buffers.
 
 use super::context::Context;
-use crate::error::{Error, Result, VkResultExt};
+use super::error::{Error, Result, VkResultExt};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use gpu_allocator::vulkan::{
@@ -128,7 +128,7 @@ impl Context {
             {
                 let _ = self.allocator.with(|a| a.free(alloc));
                 self.device.destroy_buffer(buffer, None);
-                return Err(crate::error::vk_error("vkBindBufferMemory", e));
+                return Err(Error::from_call("vkBindBufferMemory", e));
             }
             let address = self
                 .device

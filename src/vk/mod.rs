@@ -4,6 +4,7 @@
 mod commands;
 mod context;
 mod devices;
+mod error;
 mod memory;
 mod pipeline;
 mod requirements;
@@ -11,6 +12,7 @@ mod timer;
 
 pub use context::{Context, ContextOptions, ExternalDevice, KernelListener};
 pub use devices::{DeviceInfo, list_devices};
+pub use error::{Error, VkResultExt};
 pub use gpu_allocator::MemoryLocation;
 pub use memory::Buffer;
 pub use pipeline::{ComputePipeline, kernel_times, process_cpu_seconds};

@@ -2,8 +2,8 @@
 //! per-scene feature switches that fold away code a scene does not need).
 
 use super::context::Context;
+use super::error::{Error, Result, VkResultExt};
 use super::memory::Buffer;
-use crate::error::{Error, Result, VkResultExt};
 use ash::vk;
 
 pub struct ComputePipeline {

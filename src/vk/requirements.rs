@@ -2,7 +2,7 @@
 //! device, not guessed, and checked again when the device is handed over
 //! ([`super::Context::from_external`]).
 
-use crate::error::{Error, Result, VkResultExt};
+use super::error::{Error, Result, VkResultExt};
 use ash::vk;
 use std::ffi::{CStr, CString};
 

@@ -1,7 +1,7 @@
 //! Device time of submissions, from timestamp queries written around the recorded work.
 
 use super::context::Context;
-use crate::error::{Result, VkResultExt};
+use super::error::{Result, VkResultExt};
 use ash::vk;
 
 /// Two timestamps around one submission's work; None where the queue has no timestamps.

@@ -264,13 +264,13 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
     for m in &meshes {
         let (node_offset, prim_offset) = (nodes.len() as u32, triangles.len() as u32);
         if triangles.len() + m.triangles.len() > BVH_LEAF_FIRST_MASK as usize {
-            return Err(Error::Unsupported {
+            return Err(Error::Gpu(crate::vk::Error::Unsupported {
                 device: ctx.info().name.clone(),
                 what: format!(
                     "the compute BVH holds at most {} triangles",
                     BVH_LEAF_FIRST_MASK
                 ),
-            });
+            }));
         }
         nodes.extend(m.nodes.iter().map(|n| {
             BvhNode {
