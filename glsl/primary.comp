@@ -14,7 +14,7 @@ void main() {
     uvec2 pix = local + pc.tile.xy;
     uint pixel = pix.y * frame.width + pix.x;
     // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
-    // fixed point (src/render/film.rs), since long float32 running sums round systematically.
+    // fixed point (src/film/mod.rs), since long float32 running sums round systematically.
     FilmPixel acc = film[pixel];
     for (uint k = 0u; k < pc.sample_count; ++k) {
         uint sample_index = pc.first_sample + k;

@@ -4,6 +4,8 @@
 //! Data flows one way: scene file → [`scene::Scene`] (validated host types) → GPU scene
 //! (buffers, acceleration structures) → integrator kernels → film → outputs.
 
+pub mod film;
+pub mod jobs;
 pub mod layout;
 pub mod output;
 pub mod scene;

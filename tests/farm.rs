@@ -6,8 +6,8 @@
 mod common;
 use common::*;
 use illum::cli::part::{Split, plan};
-use illum::output::partial::{read_partial, write_partial};
-use illum::render::job::{Part, merge, part_info};
+use illum::jobs::partial::{read_partial, write_partial};
+use illum::jobs::{Part, merge, part_info};
 use illum::render::{RenderSettings, Renderer};
 use std::path::Path;
 

@@ -7,10 +7,10 @@
 
 mod common;
 use common::*;
-use illum::output::partial::{PartInfo, read_partial, read_partial_info, write_partial};
+use illum::film::{self, AOV_CHANNELS, BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
+use illum::jobs::partial::{PartInfo, read_partial, read_partial_info, write_partial};
+use illum::jobs::{Part, merge, merge_files};
 use illum::output::{AovPlane, Film, ImageMetadata, read_exr, write_exr};
-use illum::render::film::{self, AOV_CHANNELS, BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
-use illum::render::job::{Part, merge, merge_files};
 use std::path::PathBuf;
 
 /// 7x5 pixels, 600 samples: blocks 0..256, 256..512, 512..600.

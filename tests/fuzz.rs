@@ -10,7 +10,7 @@
 
 mod common;
 use base64::Engine;
-use illum::render::{FilmSums, Window};
+use illum::film::{FilmSums, Window};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -266,7 +266,7 @@ fn partial_exr_never_panics() {
     for (k, s) in sums.sums.iter_mut().enumerate() {
         *s = (k as i128 * 0x1234_5678_9abc) << 20;
     }
-    let info = illum::output::partial::PartInfo {
+    let info = illum::jobs::partial::PartInfo {
         samples: (0, 256),
         window,
         frame: (6, 5),
@@ -282,8 +282,8 @@ fn partial_exr_never_panics() {
         aov_planes: vec!["Direct".into()],
     };
     let good = dir.join("good.exr");
-    illum::output::partial::write_partial(&good, &info, &sums).unwrap();
-    let (back_info, back) = illum::output::partial::read_partial(&good).unwrap();
+    illum::jobs::partial::write_partial(&good, &info, &sums).unwrap();
+    let (back_info, back) = illum::jobs::partial::read_partial(&good).unwrap();
     assert_eq!((back_info, back.sums), (info, sums.sums));
     // OpenEXR's windows: the data window is the crop in frame pixels, the display window the
     // frame (a crop was stored at (0, 0) with its place only in illum.crop).
@@ -299,7 +299,7 @@ fn partial_exr_never_panics() {
     let input = dir.join("mutated.exr");
     let (tried, loaded) = fuzz("partial", &[seed], &|bytes| {
         std::fs::write(&input, bytes).unwrap();
-        illum::output::partial::read_partial(&input).is_ok()
+        illum::jobs::partial::read_partial(&input).is_ok()
     });
     assert!(tried > 50 && loaded >= 1, "{tried} tried, {loaded} loaded");
 }

@@ -223,8 +223,8 @@ fn the_cache_agrees_with_brute_force_and_full_with_path_where_no_caustics_exist(
 /// one piece.
 #[test]
 fn a_split_full_render_merges_bit_identically() {
-    use illum::render::Window;
-    use illum::render::job::{Part, merge, part_info};
+    use illum::film::Window;
+    use illum::jobs::{Part, merge, part_info};
     let ctx = context();
     let s = interior(false);
     let r = Renderer::new(ctx.clone());

@@ -5,9 +5,10 @@
 
 mod common;
 use common::*;
-use illum::output::partial::{read_partial, write_partial};
-use illum::render::job::{Part, merge, part_info};
-use illum::render::{RenderSettings, Renderer, Window};
+use illum::film::Window;
+use illum::jobs::partial::{read_partial, write_partial};
+use illum::jobs::{Part, merge, part_info};
+use illum::render::{RenderSettings, Renderer};
 use illum::trace::TraceMode;
 
 /// Odd sizes everywhere: 13x9 pixels, 600 samples (blocks 0..256, 256..512, 512..600).
@@ -243,7 +244,7 @@ fn the_command_line_splits_and_merges_exactly() {
     let parts_seconds: f64 = parts
         .iter()
         .map(|(p, _)| {
-            let (info, _) = illum::output::partial::read_partial(std::path::Path::new(p)).unwrap();
+            let (info, _) = illum::jobs::partial::read_partial(std::path::Path::new(p)).unwrap();
             info.render_seconds
         })
         .sum();

@@ -1,6 +1,6 @@
 // The per-sample film bookkeeping of the film kernels (glsl/primary.comp,
 // glsl/indirect/{full,path}.comp): the camera ray, the camera hit's AOVs, the firefly clamp, the
-// non-finite count and the sums with their half-buffer (src/render/film.rs reads them). One copy,
+// non-finite count and the sums with their half-buffer (src/film/mod.rs reads them). One copy,
 // so the kernels' films agree by construction.
 #ifndef ILLUM_FILM_GLSL
 #define ILLUM_FILM_GLSL

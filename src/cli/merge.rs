@@ -1,9 +1,9 @@
 //! `illum merge`: the jobs of a split render (partial EXRs of `illum render --samples/--crop`)
-//! into the image a render in one piece writes, bit for bit (src/render/job.rs).
+//! into the image a render in one piece writes, bit for bit (src/jobs/mod.rs).
 
 use super::check_outputs;
+use crate::jobs::merge_files;
 use crate::output::{ImageMetadata, write_exr, write_png};
-use crate::render::job::merge_files;
 use anyhow::Result;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -2,15 +2,15 @@
 //! array index names (docs/farm.md). [`plan`] cuts an image into N jobs, each a sample range and a
 //! pixel window, that `illum merge` puts back together bit for bit whatever N.
 //!
-//! - **samples** (the default): whole 256-sample film blocks (src/render/film.rs), dealt out
+//! - **samples** (the default): whole 256-sample film blocks (src/film/mod.rs), dealt out
 //!   contiguously, so no job renders a block another job renders too. With more parts than blocks
 //!   (N > ⌈spp/256⌉), a block cannot be shared without rendering it twice, so the parts of one
 //!   block split its rows into bands instead (each block gets at least one part, the rest go to
 //!   the blocks with the most samples per part).
 //! - **tiles**: all samples of a grid of N windows, as square as the frame allows (c × r = N).
 
-use crate::render::Window;
-use crate::render::film::FILM_BLOCK;
+use crate::film::FILM_BLOCK;
+use crate::film::Window;
 use anyhow::{Result, bail};
 
 /// How `--part` cuts the image.
@@ -68,7 +68,7 @@ pub fn plan(n: u32, split: Split, spp: u32, width: u32, height: u32) -> Result<V
     if n == 0 || spp == 0 || width == 0 || height == 0 {
         bail!("cannot split a {width}x{height} image of {spp} spp into {n} parts");
     }
-    crate::render::film::check_spp(spp).map_err(|e| anyhow::anyhow!("--spp: {e}"))?;
+    crate::film::check_spp(spp).map_err(|e| anyhow::anyhow!("--spp: {e}"))?;
     let full = Window::full(width, height);
     match split {
         Split::Samples => {

@@ -1,8 +1,9 @@
 //! `illum render`: one scene to EXR (and PNG), with optional error reports.
 
 use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
+use crate::film::Window;
 use crate::output::{write_exr, write_png};
-use crate::render::{RenderSettings, Renderer, Technique, Window};
+use crate::render::{RenderSettings, Renderer, Technique};
 use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
@@ -398,7 +399,7 @@ fn summary(
 }
 
 /// One job of a split render: samples A..B and/or a pixel window, or part K of N, written as a
-/// partial EXR (src/output/partial.rs) that `illum merge` combines with the others, bit for bit.
+/// partial EXR (src/jobs/partial.rs) that `illum merge` combines with the others, bit for bit.
 fn run_job(a: &RenderArgs) -> Result<()> {
     let what = if a.part.is_some() {
         "--part"
@@ -504,8 +505,8 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         }
         .into());
     }
-    let info = crate::render::job::part_info(&scene, &settings, &out, &ctx.info().name)?;
-    crate::output::partial::write_partial(&a.output, &info, &out.job.sums)?;
+    let info = crate::jobs::part_info(&scene, &settings, &out, &ctx.info().name)?;
+    crate::jobs::partial::write_partial(&a.output, &info, &out.job.sums)?;
     super::check_validation(&ctx)?;
     if !a.quiet {
         eprintln!(

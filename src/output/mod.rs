@@ -7,7 +7,6 @@
 
 mod file;
 mod openexr;
-pub mod partial;
 mod png;
 
 use std::path::{Path, PathBuf};
@@ -19,101 +18,50 @@ pub use file::{
 pub use openexr::{ExrImage, read_exr, read_reference, write_exr};
 pub use png::write_png;
 
-/// Linear, scene-referred image planes of one render, row-major, top row first, width*height each.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Film {
-    pub width: u32,
-    pub height: u32,
-    pub beauty: Vec<[f32; 3]>,
-    /// AOV "Albedo".
-    pub albedo: Vec<[f32; 3]>,
-    /// AOV "N" (world-space shading normal, components in [-1,1]).
-    pub normal: Vec<[f32; 3]>,
-    /// AOV "Z" (distance along the camera ray; +inf where nothing was hit).
-    pub depth: Vec<f32>,
-    /// AOV "Emission" (radiance of directly seen emitters).
-    pub emission: Vec<[f32; 3]>,
-    /// AOV "Variance" (per-pixel variance of the beauty mean), when present.
-    pub variance: Option<Vec<[f32; 3]>>,
-    /// The AOV planes the integrator declares (`Integrator::aov_planes`), in its order: means
-    /// over all samples, written to the EXR as `<name>.R/G/B`.
-    pub aovs: Vec<AovPlane>,
-}
+pub use crate::film::{AovPlane, Film};
 
-/// An RGB plane an integrator adds to the film (e.g. `Direct`, `IndirectDiffuse`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct AovPlane {
-    /// The EXR layer name (see `render::film::check_aov_names`).
-    pub name: String,
-    /// Per-pixel means, row-major like the film's other planes.
-    pub rgb: Vec<[f32; 3]>,
-}
-
-impl Film {
-    /// A zero-filled film without a variance plane or AOV planes.
-    pub fn new(width: u32, height: u32) -> Film {
-        let n = width as usize * height as usize;
-        Film {
-            width,
-            height,
-            beauty: vec![[0.0; 3]; n],
-            albedo: vec![[0.0; 3]; n],
-            normal: vec![[0.0; 3]; n],
-            depth: vec![0.0; n],
-            emission: vec![[0.0; 3]; n],
-            variance: None,
-            aovs: Vec::new(),
-        }
+/// Checks that the film is non-empty and every plane has `width * height` pixels; `path` is
+/// the file being written, for the error message.
+pub(crate) fn validate_film(film: &Film, path: &Path) -> Result<(), OutputError> {
+    if film.width == 0 || film.height == 0 {
+        return Err(OutputError::EmptyFilm {
+            path: path.to_path_buf(),
+            width: film.width,
+            height: film.height,
+        });
     }
-
-    /// Number of pixels, `width * height`.
-    pub fn pixel_count(&self) -> usize {
-        self.width as usize * self.height as usize
+    let expected = film.pixel_count();
+    let names: Vec<&str> = film.aovs.iter().map(|a| a.name.as_str()).collect();
+    if let Err(reason) = crate::film::check_aov_names(&names) {
+        return Err(OutputError::AovName {
+            path: path.to_path_buf(),
+            reason,
+        });
     }
-
-    /// Checks that the film is non-empty and every plane has `width * height` pixels; `path` is
-    /// the file being written, for the error message.
-    pub(crate) fn validate(&self, path: &Path) -> Result<(), OutputError> {
-        if self.width == 0 || self.height == 0 {
-            return Err(OutputError::EmptyFilm {
+    let planes = [
+        ("beauty", film.beauty.len()),
+        ("albedo", film.albedo.len()),
+        ("normal", film.normal.len()),
+        ("depth", film.depth.len()),
+        ("emission", film.emission.len()),
+        (
+            "variance",
+            film.variance.as_ref().map_or(expected, Vec::len),
+        ),
+    ];
+    let aovs = film.aovs.iter().map(|a| (a.name.as_str(), a.rgb.len()));
+    for (plane, len) in planes.into_iter().chain(aovs) {
+        if len != expected {
+            return Err(OutputError::PlaneSize {
                 path: path.to_path_buf(),
-                width: self.width,
-                height: self.height,
+                plane: plane.to_string(),
+                width: film.width,
+                height: film.height,
+                len,
             });
         }
-        let expected = self.pixel_count();
-        let names: Vec<&str> = self.aovs.iter().map(|a| a.name.as_str()).collect();
-        if let Err(reason) = crate::render::film::check_aov_names(&names) {
-            return Err(OutputError::AovName {
-                path: path.to_path_buf(),
-                reason,
-            });
-        }
-        let planes = [
-            ("beauty", self.beauty.len()),
-            ("albedo", self.albedo.len()),
-            ("normal", self.normal.len()),
-            ("depth", self.depth.len()),
-            ("emission", self.emission.len()),
-            (
-                "variance",
-                self.variance.as_ref().map_or(expected, Vec::len),
-            ),
-        ];
-        let aovs = self.aovs.iter().map(|a| (a.name.as_str(), a.rgb.len()));
-        for (plane, len) in planes.into_iter().chain(aovs) {
-            if len != expected {
-                return Err(OutputError::PlaneSize {
-                    path: path.to_path_buf(),
-                    plane: plane.to_string(),
-                    width: self.width,
-                    height: self.height,
-                    len,
-                });
-            }
-        }
-        Ok(())
     }
+    Ok(())
 }
 
 /// Facts about a render, stored as EXR header attributes.
@@ -224,23 +172,21 @@ mod tests {
         assert!(film.beauty.iter().all(|p| *p == [0.0; 3]));
         assert!(film.depth.iter().all(|d| *d == 0.0));
         assert!(film.variance.is_none());
-        film.validate(Path::new("x.exr")).unwrap();
+        validate_film(&film, Path::new("x.exr")).unwrap();
     }
 
     #[test]
     fn validate_names_plane_and_file() {
         let mut film = Film::new(3, 2);
         film.variance = Some(vec![[0.0; 3]; 5]);
-        let msg = film
-            .validate(Path::new("dir/out.exr"))
+        let msg = validate_film(&film, Path::new("dir/out.exr"))
             .unwrap_err()
             .to_string();
         assert!(
             msg.contains("dir/out.exr") && msg.contains("variance"),
             "{msg}"
         );
-        let msg = Film::new(0, 4)
-            .validate(Path::new("e.png"))
+        let msg = validate_film(&Film::new(0, 4), Path::new("e.png"))
             .unwrap_err()
             .to_string();
         assert!(msg.contains("e.png") && msg.contains("0x4"), "{msg}");

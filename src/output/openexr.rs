@@ -26,7 +26,7 @@ const SEED: &str = "illum.seed";
 /// Writes every plane of `film` as 32-bit float channels of a single-part, ZIP-compressed
 /// scanline EXR, with `meta` as header attributes.
 pub fn write_exr(path: &Path, film: &Film, meta: &ImageMetadata) -> Result<(), OutputError> {
-    film.validate(path)?;
+    super::validate_film(film, path)?;
     let attributes = layer_attributes(path, meta)?;
     let channels = FilmChannels::new(film);
     let encoding = Encoding {

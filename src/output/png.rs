@@ -12,7 +12,7 @@ use super::{Film, OutputError};
 /// Writes the beauty as 8-bit RGB: clamped to [0,1], encoded with the exact piecewise sRGB
 /// OETF, rounded to nearest; NaN and ±inf become 0.
 pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
-    film.validate(path)?;
+    super::validate_film(film, path)?;
     let encoder = SrgbEncoder::new();
     let mut bytes = Vec::with_capacity(film.pixel_count() * 3);
     bytes.extend(film.beauty.iter().flatten().map(|&v| encoder.encode(v)));

@@ -7,18 +7,15 @@
 //! even and odd half-buffers (see [`crate::metrics`]).
 
 mod direct;
-pub mod film;
 mod indirect;
 pub mod integrator;
-pub mod job;
 mod prepared;
 mod probe;
 mod session;
 mod settings;
 
+use crate::film::{self, BoundaryBlock, FILM_BLOCK, FilmSums, Resolved};
 pub use crate::gpu_scene::SceneUpdate;
-use film::FILM_BLOCK;
-pub use film::{BoundaryBlock, FilmSums, Resolved, Window};
 pub use prepared::PreparedScene;
 pub use session::{ImageState, Pass, RenderSession, TargetImage};
 pub use settings::{
@@ -95,7 +92,7 @@ pub struct RenderOutput {
     pub job: JobSums,
 }
 
-/// The exact film sums of a render or of one job of a split render (src/render/film.rs).
+/// The exact film sums of a render or of one job of a split render (src/film/mod.rs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct JobSums {
     /// Samples [A, B) of every pixel of the window that the sums own.
@@ -297,7 +294,7 @@ impl Renderer {
         };
 
         // Tiles of at most 512x512 pixels; as many samples per dispatch as the budget allows,
-        // never across a film block (film.rs): blocks leave the device whole.
+        // never across a film block (src/film/mod.rs): blocks leave the device whole.
         const TILE: u32 = 512;
         let tile_pixels =
             u64::from(window.width().min(TILE)) * u64::from(window.height().min(TILE));

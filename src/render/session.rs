@@ -52,10 +52,10 @@
 //! (between frames) to warm it for the new view, after which the images equal the blocking
 //! render's through the new camera again.
 
-use super::film::{AOV_CHANNELS, FILM_BLOCK};
 use super::integrator::{self, IntegratorPasses};
 use super::{PreparedScene, RenderSettings, Renderer, SceneUpdate};
 use crate::error::{Error, Result};
+use crate::film::{AOV_CHANNELS, FILM_BLOCK};
 use crate::layout::*;
 use crate::scene::{Camera, Scene};
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};

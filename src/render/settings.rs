@@ -1,8 +1,8 @@
 //! What a render is asked to do: the integrator's settings and the driver's (samples, time,
 //! seed, trace path, job range and window, evaluation).
 
-use super::film::Window;
 use crate::error::{Error, Result};
+use crate::film::Window;
 use crate::trace::TraceMode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
@@ -256,7 +256,7 @@ pub struct RenderSettings {
     /// samples are counted and kept out of the image.
     #[doc(hidden)]
     pub inject_non_finite: u32,
-    /// Render only samples [A, B) of the `spp`-sample image (a job of a split render; film.rs).
+    /// Render only samples [A, B) of the `spp`-sample image (a job of a split render; src/film/mod.rs).
     pub samples: Option<(u32, u32)>,
     /// Render only this pixel window.
     pub crop: Option<Window>,
@@ -265,7 +265,7 @@ pub struct RenderSettings {
 impl RenderSettings {
     /// Checks the settings for an image of `width` x `height` pixels.
     pub fn check(&self, width: u32, height: u32) -> Result<()> {
-        super::film::check_spp(self.spp).map_err(Error::Invalid)?;
+        crate::film::check_spp(self.spp).map_err(Error::Invalid)?;
         if let Some(t) = self.time
             && !(t.is_finite() && t > 0.0)
         {

@@ -127,7 +127,7 @@ impl App {
         enabled: FeatureSet,
         queue_family: u32,
     ) -> illum::Result<Context> {
-        unsafe {
+        let ctx = unsafe {
             Context::from_external(ExternalDevice {
                 entry: self.entry.clone(),
                 instance: self.instance.clone(),
@@ -137,7 +137,8 @@ impl App {
                 queue_family_index: queue_family,
                 enabled,
             })
-        }
+        };
+        Ok(ctx?)
     }
 
     /// Fails the test if the validation layers said anything on this instance.

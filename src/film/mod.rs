@@ -22,8 +22,10 @@
 
 use crate::error::Result;
 use crate::layout::FilmPixel;
-use crate::output::{AovPlane, Film};
+mod image;
+
 use crate::vk::{Buffer, Context};
+pub use image::{AovPlane, Film};
 
 /// Samples per block of the film grid (and the most one invocation takes per dispatch).
 pub const FILM_BLOCK: u32 = 256;

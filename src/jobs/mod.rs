@@ -1,23 +1,24 @@
 //! Split renders: the jobs of one image (sample ranges and/or pixel windows, each written as a
-//! partial EXR, src/output/partial.rs) and their exact merge. Merged jobs give the image a render
+//! partial EXR, src/jobs/partial.rs) and their exact merge. Merged jobs give the image a render
 //! in one piece gives, bit for bit, because every film block is rendered whole by the jobs that
-//! share it and block sums add exactly (src/render/film.rs).
+//! share it and block sums add exactly (src/film/mod.rs).
 
-use super::film::{self, FilmSums, Window};
-use super::{RenderOutput, RenderSettings};
+pub mod partial;
+
 use crate::error::{Error, Result};
-use crate::output::Film;
-use crate::output::partial::PartInfo;
+use crate::film::{self, Film, FilmSums, Window};
+use crate::render::{RenderOutput, RenderSettings};
 use crate::scene::Scene;
+use partial::PartInfo;
 use std::path::{Path, PathBuf};
 
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
 pub fn settings_text(s: &RenderSettings) -> String {
     let it = &s.integrator;
     let integrator = match it.kind {
-        super::IntegratorKind::Direct => String::new(),
-        super::IntegratorKind::Path => format!("max_depth={} ", it.max_depth),
-        super::IntegratorKind::Full => format!(
+        crate::render::IntegratorKind::Direct => String::new(),
+        crate::render::IntegratorKind::Path => format!("max_depth={} ", it.max_depth),
+        crate::render::IntegratorKind::Full => format!(
             "specular_depth={} radiosity_cache={} {}",
             it.specular_depth,
             if it.radiosity_cache { "on" } else { "off" },
@@ -423,13 +424,13 @@ pub fn merge_files(paths: &[PathBuf]) -> Result<Merged> {
     for path in paths {
         headers.push(PartHeader {
             path: path.clone(),
-            info: crate::output::partial::read_partial_info(path)?,
+            info: crate::jobs::partial::read_partial_info(path)?,
         });
     }
     check(&headers)?;
     let mut acc = Accumulator::for_parts(&headers);
     for (k, path) in paths.iter().enumerate() {
-        let (info, sums) = crate::output::partial::read_partial(path)?;
+        let (info, sums) = crate::jobs::partial::read_partial(path)?;
         if info != headers[k].info {
             return Err(part_error(path, "header", "changed while merging".into()));
         }

@@ -1,8 +1,8 @@
 //! Partial EXRs: one job of a split render (a sample range and/or a pixel window), holding its
-//! exact film sums so that `illum merge` can rebuild the image bit for bit (src/render/film.rs).
+//! exact film sums so that `illum merge` can rebuild the image bit for bit (src/film/mod.rs).
 //!
 //! The data window is the job's pixel window. Channels (all sorted by name, as EXR wants):
-//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128; units in src/render/film.rs) of each
+//! - `sum.<plane>.w0` … `w3`: the job's fixed-point sums (i128; units in src/film/mod.rs) of each
 //!   film channel ([`channel_names`]: the 24 of [`PLANES`], then `<Name>.r`, `.g`, `.b`, `.unused`
 //!   for each AOV plane the integrator declares), as four little-endian 32-bit words (UINT
 //!   channels, w0 lowest);
@@ -15,8 +15,8 @@
 //! `illum.renderSeconds`, `illum.setupSeconds`, and `illum.aovPlanes` = the AOV planes' names,
 //! comma-separated, in channel order (absent when the integrator declares none).
 
-use super::OutputError;
-use crate::render::film::{self, BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
+use crate::film::{self, BoundaryBlock, FILM_CHANNELS, FilmSums, Window};
+use crate::output::OutputError;
 use exr::prelude::*;
 use std::path::Path;
 
@@ -183,7 +183,7 @@ pub fn write_partial(
     image.layer_data.attributes.layer_position = Vec2(w.x0 as i32, w.y0 as i32);
     image.attributes.display_window =
         IntegerBounds::from_dimensions((info.frame.0 as usize, info.frame.1 as usize));
-    super::write_atomically(path, |tmp| image.write().to_file(tmp).map_err(write_err))
+    crate::output::write_atomically(path, |tmp| image.write().to_file(tmp).map_err(write_err))
 }
 
 type Res<T> = std::result::Result<T, OutputError>;
