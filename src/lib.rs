@@ -21,6 +21,7 @@ pub mod vk;
 
 pub use error::{Error, Result};
 pub mod gpu_scene;
+pub mod integrators;
 pub mod metrics;
 pub mod render;
 pub mod report;

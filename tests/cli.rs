@@ -376,3 +376,92 @@ fn help_documents_options_and_defaults() {
         );
     }
 }
+
+/// Each integrator reads its own parameters and refuses the others by name and origin (the
+/// command line, `--param`, the scene file); unknown integrators are refused everywhere, compare
+/// included (it once rendered `full` for a name it did not know).
+#[test]
+fn integrators_refuse_parameters_and_names_they_do_not_take() {
+    let out = common::temp_path("params.exr");
+    let o = out.to_str().unwrap();
+    let quick = ["--spp", "1", "--width", "8", "--height", "8", "-o", o];
+    let (code, _, err) = illum(
+        &[
+            &["render", "--integrator", "direct", "--max-depth", "3"],
+            &quick[..],
+        ]
+        .concat(),
+    );
+    assert_clean_error(
+        code,
+        &err,
+        &[
+            "direct integrator takes no parameter max_depth (--max-depth)",
+            "light_samples",
+        ],
+    );
+    let (code, _, err) = illum(&[&["render", "--param", "light_sample=3"], &quick[..]].concat());
+    assert_clean_error(code, &err, &["light_sample (--param light_sample=3)"]);
+    let (code, _, err) =
+        illum(&[&["render", "--param", "light_samples=many"], &quick[..]].concat());
+    assert_clean_error(code, &err, &["--param light_samples=many", "\"many\""]);
+    let (code, _, err) = illum(&[&["render", "--integrator", "fool"], &quick[..]].concat());
+    assert_clean_error(
+        code,
+        &err,
+        &["unknown integrator \"fool\"", "direct, full, path"],
+    );
+    let (code, _, err) = illum(&[
+        "compare",
+        "--integrators",
+        "direct,fool",
+        "--time",
+        "0.1",
+        "-o",
+        o,
+    ]);
+    assert_clean_error(code, &err, &["unknown integrator \"fool\"", "full-nocache"]);
+
+    // A scene's section: read by the integrator it names, refused by name and file.
+    let dir = common::temp_path("params-scene");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("s.json");
+    let write = |section: &str| {
+        std::fs::write(
+            &scene,
+            format!(
+                r#"{{"camera": {{"position": [0, 1, 4], "look_at": [0, 0, 0], "fov_y": 40, "resolution": [8, 8]}},
+                "lights": {{"sky": {{"dome": {{}}, "color": [1, 1, 1], "intensity": 1}}}},
+                "integrator": {section}}}"#
+            ),
+        )
+        .unwrap()
+    };
+    let s = scene.to_str().unwrap();
+    write(r#"{"type": "path", "max_depth": 2, "specular_depth": 3}"#);
+    let (code, _, err) = illum(&["render", s, "--spp", "1", "-o", o]);
+    assert_clean_error(
+        code,
+        &err,
+        &[
+            "path integrator takes no parameter specular_depth",
+            "s.json: integrator.specular_depth",
+        ],
+    );
+    write(r#"{"type": "path", "max_depth": 0}"#);
+    let (code, _, err) = illum(&["render", s, "--spp", "1", "-o", o]);
+    assert_clean_error(code, &err, &["--max-depth counts path segments"]);
+    // Another integrator on the command line leaves the section's parameters out; its own
+    // options override the section's.
+    let (code, _, err) = illum(&["render", s, "--spp", "1", "--integrator", "direct", "-o", o]);
+    assert_eq!(code, 0, "{err}");
+    let (code, _, err) = illum(&["render", s, "--spp", "1", "--max-depth", "1", "-o", o]);
+    assert_eq!(code, 0, "{err}");
+    write(r#"{"type": "path", "max_depth": [2]}"#);
+    let (code, _, err) = illum(&["render", s, "--spp", "1", "-o", o]);
+    assert_clean_error(
+        code,
+        &err,
+        &["integrator.max_depth", "a number, a boolean or a string"],
+    );
+}

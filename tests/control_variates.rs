@@ -18,9 +18,8 @@
 
 mod common;
 use common::*;
-use illum::render::{
-    ControlVariates, IntegratorSettings, RenderOutput, RenderSettings, Renderer, Technique,
-};
+use illum::integrators::{ControlVariates, Direct, DirectLighting, Technique};
+use illum::render::{RenderOutput, RenderSettings, Renderer};
 use illum::scene::{Scene, Texture};
 
 const W: u32 = 24;
@@ -32,12 +31,13 @@ fn settings(cv: ControlVariates, spp: u32) -> RenderSettings {
     RenderSettings {
         spp,
         trace: trace_mode(),
-        integrator: IntegratorSettings {
+        integrator: Direct(DirectLighting {
             technique: Technique::Mis,
             light_samples: 4,
             control_variates: cv,
             ..Default::default()
-        },
+        })
+        .into(),
         ..Default::default()
     }
 }

@@ -17,7 +17,8 @@
 
 mod common;
 use common::*;
-use illum::render::{ControlVariates, IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::integrators::{ControlVariates, Direct, DirectLighting, Technique};
+use illum::render::{RenderSettings, Renderer};
 
 const ALBEDO: f64 = 0.5;
 const RADIANCE: f64 = 2.0;
@@ -67,12 +68,13 @@ fn average_visibility_bias_is_minus_cov_over_n() {
         let s = RenderSettings {
             spp: 4,
             trace: trace_mode(),
-            integrator: IntegratorSettings {
+            integrator: Direct(DirectLighting {
                 technique: Technique::Mis,
                 light_samples: n,
                 control_variates: ControlVariates::AvgVis,
                 ..Default::default()
-            },
+            })
+            .into(),
             ..Default::default()
         };
         let outs = render_seeds(&renderer, &scene, &s, &[11, 12, 13, 14]);

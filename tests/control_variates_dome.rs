@@ -16,7 +16,8 @@
 mod common;
 use common::*;
 use glam::Vec4;
-use illum::render::{ControlVariates, IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::integrators::{ControlVariates, Direct, DirectLighting, Technique};
+use illum::render::{RenderSettings, Renderer};
 use illum::scene::{Scene, Texture, TextureFilter};
 
 const W: u32 = 24;
@@ -28,12 +29,13 @@ fn settings(cv: ControlVariates, spp: u32, light_samples: u32) -> RenderSettings
     RenderSettings {
         spp,
         trace: trace_mode(),
-        integrator: IntegratorSettings {
+        integrator: Direct(DirectLighting {
             technique: Technique::Mis,
             light_samples,
             control_variates: cv,
             ..Default::default()
-        },
+        })
+        .into(),
         ..Default::default()
     }
 }

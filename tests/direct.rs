@@ -10,7 +10,7 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use illum::render::{IntegratorSettings, Technique};
+use illum::integrators::{Direct, DirectLighting, Technique};
 use illum::stress::closed_form::polygon_irradiance;
 use std::f64::consts::PI;
 
@@ -31,10 +31,10 @@ fn scene_with(light: &str, extra: &str) -> String {
 
 /// `spp` samples per pixel of `json` by `technique`, in BATCHES independent renders.
 fn render_technique(json: &str, spp: u32, technique: Technique, seed: u64) -> Batches {
-    let integrator = IntegratorSettings {
+    let integrator = Direct(DirectLighting {
         technique,
         ..Default::default()
-    };
+    });
     render_batches_with(&scene(json), integrator, spp, seed)
 }
 

@@ -368,7 +368,9 @@ fn assert_same_bits(what: &str, image: &[[f32; 4]], reference: &[[f32; 3]]) {
 /// warmed once, see src/render/session.rs), also after a camera move and `refresh_cache`.
 #[test]
 fn sessions_with_aov_planes_equal_the_render_bit_for_bit() {
-    use illum::render::{IntegratorKind, IntegratorSettings};
+    use illum::integrators::{Full, Path};
+    use illum::render::Integrator;
+    use std::sync::Arc;
     let app = App::new();
     // Ray queries where the driver has them: the integrators' kernels compile faster there.
     let req = app.requirements();
@@ -387,15 +389,18 @@ fn sessions_with_aov_planes_equal_the_render_bit_for_bit() {
     let host = unsafe {
         host::HostFrame::with_images(&app.instance, app.pd, &device, app.queue_family, [w, h], 4)
     };
-    for kind in [IntegratorKind::Path, IntegratorKind::Full] {
+    let path: Arc<dyn Integrator> = Path::default().into();
+    let full: Arc<dyn Integrator> = Full {
+        radiosity_refresh: false,
+        ..Default::default()
+    }
+    .into();
+    for integrator in [path, full] {
+        let kind = integrator.name();
         let settings = RenderSettings {
             spp: 4,
             seed: 11,
-            integrator: IntegratorSettings {
-                kind,
-                radiosity_refresh: false,
-                ..Default::default()
-            },
+            integrator,
             ..Default::default()
         };
         let mut prepared = r.prepare(&scene, TraceMode::Auto).unwrap();
@@ -416,10 +421,10 @@ fn sessions_with_aov_planes_equal_the_render_bit_for_bit() {
         ];
         let planes: Vec<&str> = refs[0].aovs.iter().map(|a| a.name.as_str()).collect();
         assert_eq!(planes, ["Direct", "IndirectDiffuse", "Reflection"]);
-        if kind == IntegratorKind::Full {
+        if kind == "full" {
             // The setting matters: generations during the render change the image.
             let mut on = settings.clone();
-            on.integrator.radiosity_refresh = true;
+            on.integrator = Full::default().into();
             assert!(render(&prepared, &scene.camera, &on).beauty != refs[1].beauty);
         }
         let images = {
@@ -456,7 +461,7 @@ fn sessions_with_aov_planes_equal_the_render_bit_for_bit() {
         let mut refs = Vec::from(refs);
         refs.push(render(&prepared, &moved, &settings));
         for (k, (image, reference)) in images.iter().zip(&refs).enumerate() {
-            let what = format!("{} image {k}", kind.name());
+            let what = format!("{} image {k}", kind);
             assert_same_bits(&format!("{what} beauty"), &image[0], &reference.beauty);
             for (p, plane) in reference.aovs.iter().enumerate() {
                 assert_same_bits(&format!("{what} {}", plane.name), &image[p + 1], &plane.rgb);

@@ -11,19 +11,18 @@
 
 mod common;
 use common::*;
+use illum::integrators::{Full, Path};
 use illum::output::Film;
-use illum::render::{IntegratorKind, IntegratorSettings, RenderOutput, RenderSettings, Renderer};
+use illum::render::{Params, RenderOutput, RenderSettings, Renderer};
 use illum::scene::Scene;
 use std::sync::{Arc, Mutex};
 
-fn settings(kind: IntegratorKind, spp: u32) -> RenderSettings {
+/// Integrator `kind` ("path", "full") with its defaults.
+fn settings(kind: &str, spp: u32) -> RenderSettings {
     RenderSettings {
         spp,
         trace: trace_mode(),
-        integrator: IntegratorSettings {
-            kind,
-            ..Default::default()
-        },
+        integrator: illum::integrators::create(kind, &Params::new()).unwrap(),
         ..Default::default()
     }
 }
@@ -77,10 +76,7 @@ fn the_furnace_reads_le_over_one_minus_rho() {
         let truth = 1.0 / (1.0 - rho);
         let indirect = truth - 1.0 - rho;
         let s = furnace(rho);
-        for (kind, bias) in [
-            (IntegratorKind::Path, 0.0),
-            (IntegratorKind::Full, 1e-3 * indirect),
-        ] {
+        for (kind, bias) in [("path", 0.0), ("full", 1e-3 * indirect)] {
             let outs = render_seeds(&ctx, &s, &settings(kind, 16), &seeds);
             let (m, se) = mean_and_error(&outs, 12)[0];
             let limit = bias + t_for(1e-3 / 4.0, (seeds.len() - 1) as f64) * se;
@@ -112,7 +108,7 @@ fn an_open_plane_under_a_uniform_dome_gets_no_indirect_light() {
             "shapes": {"plane": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [100, 100]}, "material": "m"}},
             "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 1}}}"#,
     );
-    for kind in [IntegratorKind::Path, IntegratorKind::Full] {
+    for kind in ["path", "full"] {
         let out = &render_seeds(&ctx, &s, &settings(kind, 8), &[3])[0];
         let f = &out.film;
         for name in ["IndirectDiffuse", "Reflection"] {
@@ -180,9 +176,13 @@ fn the_cache_agrees_with_brute_force_and_full_with_path_where_no_caustics_exist(
     let ctx = context();
     let seeds: Vec<u64> = (1..=6).collect();
     let s = interior(false);
-    let cached = render_seeds(&ctx, &s, &settings(IntegratorKind::Full, 16), &seeds);
-    let mut off = settings(IntegratorKind::Full, 16);
-    off.integrator.radiosity_cache = false;
+    let cached = render_seeds(&ctx, &s, &settings("full", 16), &seeds);
+    let mut off = settings("full", 16);
+    off.integrator = Full {
+        radiosity_cache: false,
+        ..Default::default()
+    }
+    .into();
     let brute = render_seeds(&ctx, &s, &off, &seeds);
     assert_blocks_agree(&cached, &brute, CACHE_BIAS, "cache vs brute force");
     assert!(
@@ -212,8 +212,8 @@ fn the_cache_agrees_with_brute_force_and_full_with_path_where_no_caustics_exist(
         }
     }
     let s = interior(true);
-    let full = render_seeds(&ctx, &s, &settings(IntegratorKind::Full, 16), &seeds);
-    let path = render_seeds(&ctx, &s, &settings(IntegratorKind::Path, 16), &seeds);
+    let full = render_seeds(&ctx, &s, &settings("full", 16), &seeds);
+    let path = render_seeds(&ctx, &s, &settings("path", 16), &seeds);
     assert_blocks_agree(&full, &path, CACHE_BIAS, "full vs path, diffuse only");
     assert_no_validation_messages(&ctx);
 }
@@ -228,7 +228,7 @@ fn a_split_full_render_merges_bit_identically() {
     let ctx = context();
     let s = interior(false);
     let r = Renderer::new(ctx.clone());
-    let base = settings(IntegratorKind::Full, 12);
+    let base = settings("full", 12);
     let whole = r.render(&s, &base, &mut |_, _| {}).unwrap();
     let mut parts = Vec::new();
     for crop in [
@@ -282,7 +282,7 @@ fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() 
             "shapes": {"s": {"sphere": {"center": [0, 0, 0], "radius": 1}, "material": "chrome"}},
             "lights": {"sky": {"dome": {}, "color": [1, 1, 1], "intensity": 1}}}"#,
     );
-    let out = &render_seeds(&ctx, &no_diffuse, &settings(IntegratorKind::Full, 2), &[1])[0];
+    let out = &render_seeds(&ctx, &no_diffuse, &settings("full", 2), &[1])[0];
     let report = &out.stats.integrator;
     assert!(
         report
@@ -290,17 +290,16 @@ fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() 
             .any(|(k, v)| k == "radiosityCache" && v.contains("no diffuse material")),
         "{report:?}"
     );
-    let mut off = settings(IntegratorKind::Full, 2);
-    off.integrator.radiosity_cache = false;
+    let mut off = settings("full", 2);
+    off.integrator = Full {
+        radiosity_cache: false,
+        ..Default::default()
+    }
+    .into();
     render_seeds(&ctx, &furnace(0.5), &off, &[1]);
     // With the cache or without, the full integrator creates one kernel: its film pass and the
     // cache's update pass are one pipeline (compiled once, glsl/indirect/full.comp).
-    let on = render_seeds(
-        &ctx,
-        &furnace(0.5),
-        &settings(IntegratorKind::Full, 2),
-        &[1],
-    );
+    let on = render_seeds(&ctx, &furnace(0.5), &settings("full", 2), &[1]);
     let updates = on[0]
         .stats
         .integrator
@@ -331,14 +330,22 @@ fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() 
     );
     // max_depth: 1 = emission seen directly, 2 = plus direct lighting.
     let s = furnace(0.5);
-    let mut p = settings(IntegratorKind::Path, 2);
-    p.integrator.max_depth = 1;
+    let mut p = settings("path", 2);
+    p.integrator = Path {
+        max_depth: 1,
+        ..Default::default()
+    }
+    .into();
     let one = &render_seeds(&ctx, &s, &p, &[1])[0].film;
     assert!(
         one.beauty.iter().all(|b| *b == [1.0; 3]),
         "max_depth 1 is emission only"
     );
-    p.integrator.max_depth = 2;
+    p.integrator = Path {
+        max_depth: 2,
+        ..Default::default()
+    }
+    .into();
     let two = &render_seeds(&ctx, &s, &p, &[1])[0].film;
     assert!(
         two.beauty.iter().all(|b| (b[0] - 1.5).abs() < 1e-5),

@@ -6,7 +6,8 @@
 
 mod common;
 use common::*;
-use illum::render::{IntegratorSettings, LightSelection, RenderSettings, Renderer};
+use illum::integrators::{Direct, DirectLighting, LightSelection};
+use illum::render::{RenderSettings, Renderer};
 use illum::stress::many_lights::{ManyLights, scene_json};
 
 /// A block's summed difference and the (variance, dof) parts of its variance.
@@ -20,10 +21,11 @@ fn compare(n: usize, w: u32, h: u32, spp_tree: u32, spp_loop: u32) {
         spp,
         seed,
         trace: trace_mode(),
-        integrator: IntegratorSettings {
+        integrator: Direct(DirectLighting {
             light_selection: sel,
             ..Default::default()
-        },
+        })
+        .into(),
         ..Default::default()
     };
     let t0 = std::time::Instant::now();

@@ -5,7 +5,8 @@
 
 mod common;
 use common::*;
-use illum::render::{IntegratorSettings, RenderSettings, Renderer};
+use illum::integrators::{Direct, DirectLighting};
+use illum::render::{RenderSettings, Renderer};
 use illum::trace::TraceMode;
 
 const SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 0], "fov_y": 40, "resolution": [16, 12]},
@@ -66,12 +67,13 @@ fn same_seed_same_image_across_refactors() {
             spp: 16,
             seed: 11,
             trace,
-            integrator: IntegratorSettings {
+            integrator: Direct(DirectLighting {
                 light_samples: 4,
                 brdf_samples: 2,
                 diffuse_mis: false,
                 ..Default::default()
-            },
+            })
+            .into(),
             ..Default::default()
         };
         let out = r.render(&scene, &settings, &mut |_, _| {}).unwrap();

@@ -14,7 +14,8 @@
 
 mod common;
 use common::*;
-use illum::render::{IntegratorSettings, RenderOutput, RenderSettings, Renderer, Technique};
+use illum::integrators::{Direct, DirectLighting, Technique};
+use illum::render::{RenderOutput, RenderSettings, Renderer};
 
 const W: u32 = 24;
 const H: u32 = 16;
@@ -45,13 +46,14 @@ fn settings(technique: Technique, spp: u32, resample: f32, cull: f32) -> RenderS
     RenderSettings {
         spp,
         trace: trace_mode(),
-        integrator: IntegratorSettings {
+        integrator: Direct(DirectLighting {
             technique,
             light_samples: LIGHT_SAMPLES,
             shadow_resample: resample,
             shadow_cull: cull,
             ..Default::default()
-        },
+        })
+        .into(),
         ..Default::default()
     }
 }

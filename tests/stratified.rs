@@ -10,7 +10,7 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use illum::render::{IntegratorSettings, Technique};
+use illum::integrators::{Direct, DirectLighting, Technique};
 use illum::stress::closed_form::{dome_irradiance_quadrature, polygon_irradiance};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -68,12 +68,12 @@ fn stratified_light_and_brdf_samples_match_the_polygon_formula() {
         (Technique::Brdf, 4, 4),
     ] {
         eprintln!("{technique:?}, {light_samples} light samples, {brdf_samples} BRDF samples");
-        let integrator = IntegratorSettings {
+        let integrator = Direct(DirectLighting {
             technique,
             light_samples,
             brdf_samples,
             ..Default::default()
-        };
+        });
         // 256 spp: 16 camera samples per batch. A BRDF sample's estimate is nearly binary here
         // (hit the light or not), so each batch mean needs enough of them to be near normal for
         // the t-tests (at 4 camera samples, a pixel that happened to miss rarely failed at t = 7).
@@ -104,12 +104,12 @@ fn stratified_dome_samples_match_the_quadrature_of_the_map() {
     let e = dome_irradiance_quadrature(texture, rotation_deg, convention, DVec3::Y)
         * DVec3::new(radiance.x.into(), radiance.y.into(), radiance.z.into());
     assert!(e.min_element() > 0.0);
-    let integrator = IntegratorSettings {
+    let integrator = Direct(DirectLighting {
         technique: Technique::Light,
         // A textured dome takes 8 N_max samples: 32 row strata.
         light_samples: 4,
         ..Default::default()
-    };
+    });
     let b = render_batches_with(&scene, integrator, 256, 6);
     assert_matches_expectation(&b, |_| (ALBEDO * e / PI).to_array(), 0.01);
 }

@@ -17,7 +17,8 @@ mod common;
 #[path = "stress/reference.rs"]
 mod reference;
 use common::*;
-use illum::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
+use illum::integrators::{Direct, DirectLighting, Technique};
+use illum::render::{RenderSettings, Renderer};
 use illum::stress::{CASES, Case, FLOAT_FLOOR, Reference, mean_luminance};
 use illum::trace::TraceMode;
 use std::path::Path;
@@ -67,10 +68,11 @@ fn run_case(name: &str) {
             spp: SPP,
             seed: 7,
             trace,
-            integrator: IntegratorSettings {
+            integrator: Direct(DirectLighting {
                 technique: Technique::Mis,
                 ..Default::default()
-            },
+            })
+            .into(),
             ..Default::default()
         };
         let out = renderer
@@ -206,10 +208,11 @@ fn huge_emitters_near_the_floor_give_bounded_samples() {
             spp: 1,
             seed: 3,
             trace: trace_mode(),
-            integrator: IntegratorSettings {
+            integrator: Direct(DirectLighting {
                 technique: Technique::Light,
                 ..Default::default()
-            },
+            })
+            .into(),
             ..Default::default()
         };
         let out = renderer

@@ -5,10 +5,11 @@ use super::{
     str_arg,
 };
 use crate::error::Error;
-use crate::render::{ImageState, IntegratorKind, IntegratorSettings, Pass, RenderSettings};
+use crate::render::{ImageState, Integrator, Params, Pass, RenderSettings};
 use ash::vk::{self, Handle};
 use std::ffi::c_char;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Arc;
 
 /// A scene from scene JSON (docs/scene-format.md); relative paths resolve against `base_dir`
 /// (NULL: the working directory). Errors name the field and value.
@@ -251,21 +252,15 @@ fn target_image(t: &IllumTarget) -> crate::render::TargetImage {
     }
 }
 
-/// The integrator named `name` ("direct", "path" or "full"; NULL: "direct").
-unsafe fn integrator_arg(name: *const c_char) -> Result<IntegratorKind, Error> {
+/// The integrator named `name` (any of the integrators' table; NULL: the default, "direct"),
+/// with its default parameters.
+unsafe fn integrator_arg(name: *const c_char) -> Result<Arc<dyn Integrator>, Error> {
     if name.is_null() {
-        return Ok(IntegratorKind::Direct);
+        return Ok(crate::integrators::default_integrator());
     }
     // SAFETY: the caller's NUL-terminated string.
     let n = unsafe { str_arg(name, "integrator")? };
-    [
-        IntegratorKind::Direct,
-        IntegratorKind::Path,
-        IntegratorKind::Full,
-    ]
-    .into_iter()
-    .find(|k| k.name() == n)
-    .ok_or_else(|| Error::Invalid(format!("integrator {n:?}: expected direct, path or full")))
+    crate::integrators::create(n, &Params::new()).map_err(Error::Invalid)
 }
 
 /// A progressive render of `prepared` through `scene`'s camera into `target`, with `integrator`
@@ -290,11 +285,7 @@ pub unsafe extern "C" fn illum_session_create(
         let t = target.as_ref().ok_or_else(|| null("target"))?;
         let settings = RenderSettings {
             seed,
-            integrator: IntegratorSettings {
-                kind: integrator_arg(integrator)?,
-                ..Default::default()
-            },
-            ..Default::default()
+            ..RenderSettings::with_integrator(integrator_arg(integrator)?)
         };
         let session =
             c.renderer

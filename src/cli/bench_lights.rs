@@ -4,7 +4,8 @@
 //! a tree render of `--reference-factor` times the time (its own error is in the figures at about
 //! 1/factor of a tree render's).
 
-use crate::render::{IntegratorSettings, LightSelection, RenderSettings, Renderer};
+use crate::integrators::{Direct, DirectLighting, LightSelection};
+use crate::render::{RenderSettings, Renderer};
 use crate::stress::many_lights::{ManyLights, scene_json};
 use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
@@ -72,10 +73,11 @@ pub fn run(a: &BenchLightsArgs) -> Result<()> {
                 time: Some(seconds),
                 seed,
                 trace: a.trace,
-                integrator: IntegratorSettings {
+                integrator: Direct(DirectLighting {
                     light_selection: sel,
                     ..Default::default()
-                },
+                })
+                .into(),
                 ..Default::default()
             };
             r.render_prepared(&prepared, &scene.camera, &settings, &[seed], &mut |_, _| {})

@@ -3,12 +3,14 @@
 
 use super::render::{announce_compiles, progress_bar};
 use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
+use crate::integrators::Technique;
 use crate::output::write_exr;
-use crate::render::{PassReport, RenderOutput, RenderSettings, Renderer, Technique};
+use crate::render::{Integrator, PassReport, RenderOutput, RenderSettings, Renderer};
 use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 #[derive(clap::Args)]
@@ -19,10 +21,11 @@ pub struct CompareArgs {
     /// brdf,light,mis; mis with --integrators]
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub techniques: Option<Vec<Technique>>,
-    /// Integrators to compare, comma separated, each once: direct, full, full-nocache (the full
-    /// integrator's partition by brute force, --radiosity-cache off), path. Each renders with
-    /// each technique. [default: the one --integrator names]
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = ["direct", "full", "full-nocache", "path"])]
+    /// Integrators to compare, comma separated, each once: any of `illum render --integrator`
+    /// (direct, full, path), or full-nocache (the full integrator's partition by brute force,
+    /// --radiosity-cache off). Each renders with each technique. [default: the one --integrator
+    /// names]
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub integrators: Vec<String>,
     /// Sample allocations to compare, comma separated: L/B (light samples / BRDF samples per
     /// lobe, diffuse MIS as --diffuse-mis says), L/B/dmis (diffuse MIS on) or L/B/nodmis (off),
@@ -90,10 +93,21 @@ fn parse_samples(s: &str) -> Result<Samples, String> {
     })
 }
 
-/// One rendering of the comparison: its name and integrator settings.
+/// One rendering of the comparison: its name and integrator.
 struct Run {
     name: String,
-    integrator: crate::render::IntegratorSettings,
+    integrator: Arc<dyn Integrator>,
+}
+
+/// A name `--integrators` takes besides the integrators' own: (name, integrator, parameters).
+type Alias = (&'static str, &'static str, &'static [(&'static str, &'static str)]);
+
+const ALIASES: &[Alias] =
+    &[("full-nocache", "full", &[("radiosity_cache", "off")])];
+
+fn alias_names() -> String {
+    let n: Vec<&str> = ALIASES.iter().map(|a| a.0).collect();
+    n.join(", ")
 }
 
 fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
@@ -123,20 +137,39 @@ fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
         .flat_map(|i| samples.iter().map(move |s| (i, s)))
     {
         for &t in &techniques {
-            let mut it = a.integrator.settings(t, scene);
+            let (kind, extra): (String, &[(&str, &str)]) = match integrator {
+                Some(spec) => match ALIASES.iter().find(|(n, ..)| n == spec) {
+                    Some((_, kind, extra)) => (kind.to_string(), extra),
+                    None => (spec.to_string(), &[]),
+                },
+                None => (a.integrator.name(scene), &[]),
+            };
+            let mut p = a.integrator.params(&kind, scene)?;
+            p.set("technique", t.name(), "--techniques");
             if let Some(sa) = sa {
-                it.light_samples = sa.light;
-                it.brdf_samples = sa.brdf;
-                it.diffuse_mis = sa.diffuse_mis.unwrap_or(it.diffuse_mis);
+                p.set("light_samples", sa.light.to_string(), "--samples");
+                p.set("brdf_samples", sa.brdf.to_string(), "--samples");
+                if let Some(d) = sa.diffuse_mis {
+                    p.set("diffuse_mis", if d { "on" } else { "off" }, "--samples");
+                }
             }
-            if let Some(spec) = integrator {
-                it.kind = match *spec {
-                    "direct" => crate::render::IntegratorKind::Direct,
-                    "path" => crate::render::IntegratorKind::Path,
-                    _ => crate::render::IntegratorKind::Full,
-                };
-                it.radiosity_cache = *spec != "full-nocache";
+            for (k, v) in extra {
+                p.set(
+                    k,
+                    *v,
+                    format!("--integrators {}", integrator.unwrap_or("")),
+                );
             }
+            let it = crate::integrators::create(&kind, &p).map_err(|e| {
+                anyhow::anyhow!(
+                    "{e}{}",
+                    if integrator.is_some() {
+                        format!(" (or one of the aliases: {})", alias_names())
+                    } else {
+                        String::new()
+                    }
+                )
+            })?;
             let mut name = match (integrator, techniques.len()) {
                 (None, _) => t.name().to_string(),
                 (Some(i), 1) => i.to_string(),
@@ -202,7 +235,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     let mut rows: Vec<(String, RenderOutput)> = Vec::new();
     for (run, exr) in runs.iter().zip(&exrs) {
         let settings = RenderSettings {
-            integrator: run.integrator,
+            integrator: run.integrator.clone(),
             spp: 1 << 20,
             time: Some(a.time),
             seed: a.seed,

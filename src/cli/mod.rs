@@ -14,11 +14,12 @@ mod signal;
 pub mod stress;
 
 use crate::output::ImageMetadata;
-use crate::render::{RenderOutput, RenderSettings};
+use crate::render::{Integrator, Params, RenderOutput, RenderSettings};
 use crate::scene::Scene;
 use anyhow::Result;
 use clap::Subcommand;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(Subcommand)]
 pub enum Command {
@@ -125,94 +126,130 @@ impl SceneArgs {
     }
 }
 
-/// Sample counts of the direct-lighting integrator (the technique is chosen per command).
+/// The integrator and its parameters. Each option here sets the parameter of its name (dashes
+/// for underscores) of whichever integrator renders, which refuses one it does not take;
+/// `--param NAME=VALUE` sets any.
 #[derive(clap::Args, Clone)]
 pub struct IntegratorArgs {
+    /// direct: direct lighting only; full: direct lighting, indirect diffuse through the radiosity
+    /// cache, and reflections (caustics left out); path: brute-force path tracer (all light
+    /// paths). [default: the scene's "integrator", else direct]
+    #[arg(long, value_name = "NAME")]
+    pub integrator: Option<String>,
     /// Most light samples per light (each light takes its solid-angle share of these, at least 1);
-    /// 1 to 64.
-    #[arg(long, default_value_t = 4)]
-    pub light_samples: u32,
-    /// BRDF samples per lobe; 1 to 64.
-    #[arg(long, default_value_t = 2)]
-    pub brdf_samples: u32,
+    /// 1 to 64. [default: 4]
+    #[arg(long, value_name = "N")]
+    pub light_samples: Option<u32>,
+    /// BRDF samples per lobe; 1 to 64. [default: 2]
+    #[arg(long, value_name = "N")]
+    pub brdf_samples: Option<u32>,
     /// Diffuse lobe also by cosine-sampled BRDF samples, combined by MIS (off: light samples only,
     /// as in the course); `--diffuse-mis` alone is on, `--diffuse-mis=off` off. [default: off]
     #[arg(long, value_name = "MODE", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = ["on", "off"])]
     pub diffuse_mis: Option<String>,
-    /// direct: direct lighting only; full: direct lighting, indirect diffuse through the radiosity
-    /// cache, and reflections (caustics left out); path: brute-force path tracer (all light
-    /// paths). [default: the scene's "integrator", else direct]
-    #[arg(long, value_name = "KIND")]
-    pub integrator: Option<crate::render::IntegratorKind>,
     /// path: the most path segments, as Mitsuba's max_depth (1: emission seen directly, 2: direct
-    /// lighting, -1: unbounded). [default: the scene's, else -1]
+    /// lighting, -1: unbounded). [default: -1]
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub max_depth: Option<i32>,
-    /// full: the most specular bounces of the reflection integrator, 0 to 64. [default: the
-    /// scene's, else 4]
+    /// full: the most specular bounces of the reflection integrator, 0 to 64. [default: 4]
     #[arg(long, value_name = "N")]
     pub specular_depth: Option<u32>,
     /// full: indirect diffuse through the radiosity cache (on) or by brute force (off), to
-    /// measure the cache's bias and gain. [default: the scene's, else on]
+    /// measure the cache's bias and gain. [default: on]
     #[arg(long, value_name = "MODE", value_parser = ["on", "off"])]
     pub radiosity_cache: Option<String>,
     /// How light samples pick lights in scenes of more than 64 lights: tree (the light tree), scan
     /// (a linear scan over every light, as before the tree) or loop (every light at every point).
-    #[arg(long, value_name = "KIND", default_value = "tree")]
-    pub light_selection: crate::render::LightSelection,
+    /// [default: tree]
+    #[arg(long, value_name = "KIND")]
+    pub light_selection: Option<String>,
     /// Trace shadow rays for this share (0 to 1] of each group's light and BRDF samples, picked by
     /// resampling on their unshadowed luminance, unbiased (docs/techniques.md,
-    /// "Shadow resampling"); 1: all.
-    #[arg(long, value_name = "PCT", default_value_t = 1.0)]
-    pub shadow_resample: f32,
+    /// "Shadow resampling"); 1: all. [default: 1]
+    #[arg(long, value_name = "PCT")]
+    pub shadow_resample: Option<f32>,
     /// Russian roulette before each shadow ray: keep a sample with probability min(1, its
-    /// luminance / this), unbiased (docs/techniques.md, "Shadow culling"); 0: off.
-    #[arg(long, value_name = "T", default_value_t = 0.0)]
-    pub shadow_cull: f32,
+    /// luminance / this), unbiased (docs/techniques.md, "Shadow culling"); 0: off. [default: 0]
+    #[arg(long, value_name = "T")]
+    pub shadow_cull: Option<f32>,
     /// Control variates for diffuse light samples of looped rect, disk, sphere, triangle, sun and
     /// dome lights (textured ones with their mean radiance, a textured dome with its SH9
     /// projection, its sampler then drawing 10% of its samples uniformly; not lights picked from
     /// the tree): off, avgvis (the course's average visibility: biased, consistent) or loo (leave
-    /// one out: unbiased).
-    #[arg(long, value_name = "MODE", default_value = "off")]
-    pub control_variates: crate::render::ControlVariates,
+    /// one out: unbiased). [default: off]
+    #[arg(long, value_name = "MODE")]
+    pub control_variates: Option<String>,
+    /// Any parameter of the integrator, NAME=VALUE (repeatable; docs/scene-format.md lists each
+    /// integrator's).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
 }
 
 impl IntegratorArgs {
-    /// The settings: these options, else the scene's `integrator` section, else the defaults.
-    pub fn settings(
-        &self,
-        technique: crate::render::Technique,
-        scene: &Scene,
-    ) -> crate::render::IntegratorSettings {
-        let d = crate::render::IntegratorSettings::default();
+    /// The integrator's name: this option, else the scene's, else the default.
+    pub fn name(&self, scene: &Scene) -> String {
+        self.integrator
+            .clone()
+            .or_else(|| scene.integrator.name.clone())
+            .unwrap_or_else(|| crate::integrators::default_integrator().name().to_string())
+    }
+
+    /// The parameters for integrator `name`: the scene's (when its section names that integrator
+    /// or none), then these options over them.
+    pub fn params(&self, name: &str, scene: &Scene) -> Result<Params> {
+        let mut p = Params::new();
         let c = &scene.integrator;
-        crate::render::IntegratorSettings {
-            kind: self.integrator.or(c.kind).unwrap_or(d.kind),
-            max_depth: self.max_depth.or(c.max_depth).unwrap_or(d.max_depth),
-            specular_depth: self
-                .specular_depth
-                .or(c.specular_depth)
-                .unwrap_or(d.specular_depth),
-            radiosity_cache: self
-                .radiosity_cache
-                .as_deref()
-                .map(|v| v == "on")
-                .or(c.radiosity_cache)
-                .unwrap_or(d.radiosity_cache),
-            radiosity_refresh: d.radiosity_refresh,
-            technique,
-            light_samples: self.light_samples,
-            brdf_samples: self.brdf_samples,
-            diffuse_mis: self
-                .diffuse_mis
-                .as_deref()
-                .map_or(d.diffuse_mis, |v| v == "on"),
-            light_selection: self.light_selection,
-            shadow_resample: self.shadow_resample,
-            shadow_cull: self.shadow_cull,
-            control_variates: self.control_variates,
+        if c.name.as_deref().is_none_or(|n| n == name) {
+            let file = scene
+                .source
+                .as_ref()
+                .map_or_else(|| "the scene".to_string(), |s| s.display().to_string());
+            for (k, v) in &c.params {
+                p.set(k, v, format!("{file}: integrator.{k}"));
+            }
         }
+        let options: [(&str, Option<String>); 10] = [
+            ("light_samples", self.light_samples.map(|v| v.to_string())),
+            ("brdf_samples", self.brdf_samples.map(|v| v.to_string())),
+            ("diffuse_mis", self.diffuse_mis.clone()),
+            ("max_depth", self.max_depth.map(|v| v.to_string())),
+            ("specular_depth", self.specular_depth.map(|v| v.to_string())),
+            ("radiosity_cache", self.radiosity_cache.clone()),
+            ("light_selection", self.light_selection.clone()),
+            (
+                "shadow_resample",
+                self.shadow_resample.map(|v| v.to_string()),
+            ),
+            ("shadow_cull", self.shadow_cull.map(|v| v.to_string())),
+            ("control_variates", self.control_variates.clone()),
+        ];
+        for (k, v) in options {
+            if let Some(v) = v {
+                p.set(k, v, format!("--{}", k.replace('_', "-")));
+            }
+        }
+        for kv in &self.params {
+            let Some((k, v)) = kv.split_once('=') else {
+                anyhow::bail!("--param {kv:?}: expected NAME=VALUE");
+            };
+            p.set(k.trim(), v, format!("--param {kv}"));
+        }
+        Ok(p)
+    }
+
+    /// The integrator these options, the scene and the defaults name, with its parameters
+    /// (and `technique`, from `--technique`, when given).
+    pub fn integrator(
+        &self,
+        scene: &Scene,
+        technique: Option<&str>,
+    ) -> Result<Arc<dyn Integrator>> {
+        let name = self.name(scene);
+        let mut p = self.params(&name, scene)?;
+        if let Some(t) = technique {
+            p.set("technique", t, "--technique");
+        }
+        crate::integrators::create(&name, &p).map_err(|e| anyhow::anyhow!("{e}"))
     }
 }
 
@@ -268,20 +305,14 @@ pub fn image_metadata(
     let last = out.passes.last().cloned().unwrap_or_default();
     let mut extra = vec![
         ("illum.trace".to_string(), s.trace.to_string()),
-        ("illum.integrator".into(), it.kind.name().into()),
-        ("illum.technique".into(), it.technique.name().into()),
-        ("illum.lightSamples".into(), it.light_samples.to_string()),
-        ("illum.brdfSamples".into(), it.brdf_samples.to_string()),
-        ("illum.diffuseMIS".into(), it.diffuse_mis.to_string()),
-        (
-            "illum.shadowResample".into(),
-            it.shadow_resample.to_string(),
-        ),
-        ("illum.shadowCull".into(), it.shadow_cull.to_string()),
-        (
-            "illum.controlVariates".into(),
-            it.control_variates.name().into(),
-        ),
+        ("illum.integrator".into(), it.name().into()),
+    ];
+    extra.extend(
+        it.header()
+            .into_iter()
+            .map(|(k, v)| (format!("illum.{k}"), v)),
+    );
+    extra.extend([
         (
             "illum.nonFiniteSamples".into(),
             s.non_finite_samples.to_string(),
@@ -290,7 +321,7 @@ pub fn image_metadata(
             "illum.deviceSeconds".into(),
             format!("{:.6}", s.device_seconds),
         ),
-    ];
+    ]);
     if let Some(e) = last.estimated_relmse {
         extra.push(("illum.estimatedRelMSE".into(), format!("{e:.6e}")));
     }

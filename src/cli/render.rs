@@ -3,7 +3,7 @@
 use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
 use crate::film::Window;
 use crate::output::{write_exr, write_png};
-use crate::render::{RenderSettings, Renderer, Technique};
+use crate::render::{RenderSettings, Renderer};
 use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
@@ -46,9 +46,10 @@ pub struct RenderArgs {
     /// Trace path: auto (ray queries where the device has them), rayquery or bvh.
     #[arg(long, default_value = "auto")]
     pub trace: TraceMode,
-    /// Direct lighting by BRDF sampling, light sampling, or both with MIS.
-    #[arg(long, default_value = "mis")]
-    pub technique: Technique,
+    /// Direct lighting by BRDF sampling (brdf), light sampling (light), or both with MIS (mis).
+    /// [default: mis]
+    #[arg(long, value_name = "TECHNIQUE")]
+    pub technique: Option<String>,
     #[command(flatten)]
     pub integrator: IntegratorArgs,
     /// Firefly clamp: scale down (keeping the hue) any camera sample whose direct lighting has a
@@ -159,7 +160,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         (None, None) => 16,
     };
     let settings = RenderSettings {
-        integrator: a.integrator.settings(a.technique, &scene),
+        integrator: a.integrator.integrator(&scene, a.technique.as_deref())?,
         spp,
         time: a.time,
         seed: a.seed,
@@ -457,7 +458,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
     })?;
     let renderer = Renderer::new(ctx.clone());
     let settings = RenderSettings {
-        integrator: a.integrator.settings(a.technique, &scene),
+        integrator: a.integrator.integrator(&scene, a.technique.as_deref())?,
         spp,
         seed: a.seed,
         trace: a.trace,

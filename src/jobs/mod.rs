@@ -14,33 +14,9 @@ use std::path::{Path, PathBuf};
 
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
 pub fn settings_text(s: &RenderSettings) -> String {
-    let it = &s.integrator;
-    let integrator = match it.kind {
-        crate::render::IntegratorKind::Direct => String::new(),
-        crate::render::IntegratorKind::Path => format!("max_depth={} ", it.max_depth),
-        crate::render::IntegratorKind::Full => format!(
-            "specular_depth={} radiosity_cache={} {}",
-            it.specular_depth,
-            if it.radiosity_cache { "on" } else { "off" },
-            // Named only when off, so that parts of earlier versions keep their text.
-            if it.radiosity_refresh {
-                ""
-            } else {
-                "radiosity_refresh=off "
-            }
-        ),
-    };
     format!(
-        "integrator={} {integrator}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} shadow_resample={} shadow_cull={} control_variates={} clamp={} nan_every={}",
-        it.kind.name(),
-        it.technique.name(),
-        it.light_samples,
-        it.brdf_samples,
-        it.diffuse_mis,
-        it.light_selection.name(),
-        it.shadow_resample,
-        it.shadow_cull,
-        it.control_variates.name(),
+        "{} clamp={} nan_every={}",
+        s.integrator.identity(),
         s.clamp.map_or("off".into(), |c| c.to_string()),
         s.inject_non_finite
     )

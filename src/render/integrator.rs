@@ -1,16 +1,26 @@
-//! The seam between the driver (src/render/mod.rs: budget, passes, tiles, film blocks, progress,
-//! cancel, evaluation) and the integrators, which turn camera samples into film sums. The driver
-//! knows no integrator: it asks [`select`] for the one the settings name, lets it write its frame
-//! constants and create its kernels, and has it record each dispatch. Adding an integrator is its
-//! own module plus one line in [`select`].
+//! The seam between the driver (src/render/driver.rs: budget, passes, tiles, film blocks,
+//! progress, cancel, evaluation) and the integrators (src/integrators), which turn camera samples
+//! into film sums. The driver knows no integrator: the settings hold one, which writes its frame
+//! constants, creates its kernels and has them record each dispatch.
 
-use super::{IntegratorKind, PreparedScene, RenderSettings};
+use super::PreparedScene;
 use crate::error::Result;
 use crate::layout::{Frame, PassConstants};
 use crate::vk::{Buffer, Context};
 use ash::vk;
 
-pub trait Integrator {
+/// How the render drives an integrator's own state (e.g. a cache) between dispatches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Schedule {
+    /// The blocking render: the state may change between dispatches ([`IntegratorPasses::begin`]).
+    Progressive,
+    /// Passes recorded into a host's command buffers: the state stays as it was when set up.
+    Fixed,
+}
+
+/// An integrator with its parameters: what a render's settings hold. Each integrator parses its
+/// own parameters (`crate::integrators` keeps the table of them).
+pub trait Integrator: Send + Sync + std::fmt::Debug {
     /// Its name, for messages and headers, and the key under which a prepared scene keeps its
     /// kernels.
     fn name(&self) -> &'static str;
@@ -18,6 +28,8 @@ pub trait Integrator {
     fn aov_planes(&self) -> &'static [&'static str] {
         &[]
     }
+    /// Checks its parameters (a message naming the one that is wrong).
+    fn check(&self) -> std::result::Result<(), String>;
     /// Writes its settings into the frame constants.
     fn configure(&self, frame: &mut Frame);
     /// Feature bits its settings add to the scene's (FEATURE_SHADOW_*); a prepared scene keeps
@@ -27,23 +39,36 @@ pub trait Integrator {
     }
     /// Creates its kernels (and the buffers they own) for `scene`.
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>>;
+    /// Every parameter that changes its samples, as text: jobs of one image must agree on it.
+    fn identity(&self) -> String;
+    /// Its parameters for an image's header: (name, value).
+    fn header(&self) -> Vec<(String, String)>;
+    /// Itself, for its kernels to read its parameters.
+    fn as_any(&self) -> &dyn std::any::Any;
 }
 
 /// An integrator's kernels. A prepared scene keeps them between renders; each render configures
 /// and binds them first.
 pub trait IntegratorPasses {
-    /// Writes what the kernels own (e.g. a cache's address) into a render's frame constants.
+    /// Writes what the kernels own (e.g. a cache's address) into a render's frame constants;
+    /// `integrator` is the one that created them, with this render's parameters.
     fn configure(
         &self,
         _ctx: &Context,
         _scene: &PreparedScene,
         _frame: &mut Frame,
-        _settings: &RenderSettings,
+        _integrator: &dyn Integrator,
+        _schedule: Schedule,
     ) -> Result<()> {
         Ok(())
     }
     /// Points the kernels at a render's frame constants, film and AOV planes.
     fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>);
+    /// Whether the kernels keep state that [`IntegratorPasses::begin`] brings up to date (a
+    /// cache to warm up before the first pass).
+    fn stateful(&self) -> bool {
+        false
+    }
     /// Called before samples [first, first + count) of every pixel are recorded with `seed`:
     /// brings the integrator's own state (e.g. a cache generation) to what those samples see and
     /// returns how many of them one dispatch may take (at least 1) while it stays fixed.
@@ -56,15 +81,5 @@ pub trait IntegratorPasses {
     /// Figures about the last render for headers and summaries: (name, value).
     fn report(&self) -> Vec<(String, String)> {
         Vec::new()
-    }
-}
-
-/// The integrator `settings` ask for.
-pub fn select(settings: &RenderSettings) -> Box<dyn Integrator> {
-    let it = settings.integrator;
-    match it.kind {
-        IntegratorKind::Direct => Box::new(super::direct::Direct(it)),
-        IntegratorKind::Full => Box::new(super::indirect::Full(it)),
-        IntegratorKind::Path => Box::new(super::indirect::Path(it)),
     }
 }

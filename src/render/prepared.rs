@@ -71,6 +71,11 @@ impl PreparedScene {
     }
 
     /// The trace path the structure was built for ("rayquery" or "bvh").
+    /// Lights rendered, emissive shapes and triangles included.
+    pub fn emitters(&self) -> u32 {
+        self.gpu.emitters
+    }
+
     pub fn trace_name(&self) -> &'static str {
         self.trace.name()
     }

@@ -52,13 +52,13 @@
 //! (between frames) to warm it for the new view, after which the images equal the blocking
 //! render's through the new camera again.
 
-use super::integrator::{self, IntegratorPasses};
-use super::{PreparedScene, RenderSettings, Renderer, SceneUpdate};
+use super::driver::{FilmBuffers, Setup, tiles};
+use super::{PreparedScene, RenderSettings, Renderer, SceneUpdate, Schedule};
 use crate::error::{Error, Result};
-use crate::film::{AOV_CHANNELS, FILM_BLOCK};
+use crate::film::{FILM_BLOCK, Window};
 use crate::layout::*;
 use crate::scene::{Camera, Scene};
-use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
+use crate::vk::{Buffer, ComputePipeline, Context};
 use ash::vk;
 use std::time::Instant;
 
@@ -95,17 +95,11 @@ pub struct RenderSession<'p> {
     ctx: Context,
     prepared: &'p mut PreparedScene,
     settings: RenderSettings,
-    integrator: &'static str,
-    /// The settings' kernel feature bits (Integrator::features).
-    features: u32,
-    kernels: Option<Box<dyn IntegratorPasses>>,
+    /// The integrator's kernels and the frame constants; None only while dropping.
+    setup: Option<Setup>,
     resolve: ComputePipeline,
     frame: Buffer,
-    frame_data: Frame,
-    film: Buffer,
-    /// The integrator's AOV planes ([pixel][plane] vec4 sums), when it has any.
-    aovs: Option<Buffer>,
-    aov_planes: &'static [&'static str],
+    film: FilmBuffers,
     /// The host's AOV images: plane index, target, its resolve pipeline (descriptor set).
     aov_targets: Vec<(u32, TargetImage, ComputePipeline)>,
     camera: Camera,
@@ -132,38 +126,19 @@ impl Renderer {
         let ctx = self.context().clone();
         settings.check(camera.width, camera.height)?;
         check_extent(camera, &target)?;
-        let mut settings = settings.clone();
-        // Passes cannot refresh the cache (see the module doc).
-        settings.integrator.radiosity_refresh = false;
-        let pixels = u64::from(camera.width) * u64::from(camera.height);
+        let setup = Setup::new(&ctx, prepared, camera, settings, Schedule::Fixed)?;
         let frame = ctx.upload(
             "session frame",
             std::slice::from_ref(&Frame::default()),
             vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         )?;
-        let film_usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-        let film = ctx.create_buffer(
+        let film = FilmBuffers::new(
+            &ctx,
             "session film",
-            pixels * std::mem::size_of::<FilmPixel>() as u64,
-            film_usage,
-            MemoryLocation::GpuOnly,
+            u64::from(camera.width) * u64::from(camera.height),
+            setup.aov_planes.len(),
+            vk::BufferUsageFlags::TRANSFER_DST,
         )?;
-        let integrator = integrator::select(&settings);
-        let aov_planes = integrator.aov_planes();
-        let aovs = match aov_planes.len() {
-            0 => None,
-            p => Some(ctx.create_buffer(
-                "session aovs",
-                pixels * p as u64 * (AOV_CHANNELS * 4) as u64,
-                film_usage,
-                MemoryLocation::GpuOnly,
-            )?),
-        };
-        // The prepared scene's kernels if an earlier render left them, given back on drop.
-        let kernels = match prepared.take_kernels(integrator.name(), integrator.features()) {
-            Some(k) => k,
-            None => integrator.kernels(&ctx, prepared)?,
-        };
         let resolve = ComputePipeline::new(
             &ctx,
             "resolve_image",
@@ -175,22 +150,17 @@ impl Renderer {
             16,
             &[],
         )?;
-        resolve.bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, &film);
+        resolve.bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, &film.film);
         resolve.bind_storage_image(BINDING_IMAGE, target.view);
         let per_dispatch = if self.loop_limited()? { 1 } else { FILM_BLOCK };
         let mut s = RenderSession {
             ctx,
             prepared,
-            settings,
-            integrator: integrator.name(),
-            features: integrator.features(),
-            kernels: Some(kernels),
+            settings: settings.clone(),
+            setup: Some(setup),
             resolve,
             frame,
-            frame_data: Frame::default(),
             film,
-            aovs,
-            aov_planes,
             aov_targets: Vec::new(),
             camera: camera.clone(),
             target,
@@ -199,22 +169,9 @@ impl Renderer {
             samples: 0,
         };
         s.refresh()?;
-        // Drivers that compile a pipeline at its first dispatch (llvmpipe: up to tens of seconds
-        // for `full`) do it now, not in the host's first frame: an empty dispatch, as the
-        // blocking render's warm-up (the first pass clears the film).
-        let k = s
-            .kernels
-            .as_ref()
-            .expect("kernels live as long as the session");
-        s.ctx.one_shot(|cmd| {
-            k.record(
-                cmd,
-                &PassConstants {
-                    tile: [0, 0, 1, 1],
-                    ..Default::default()
-                },
-            )
-        })?;
+        // Drivers that compile a pipeline at its first dispatch do it now, not in the host's
+        // first frame (the first pass clears the film).
+        s.setup().warm_up(&s.ctx)?;
         Ok(s)
     }
 }
@@ -234,26 +191,28 @@ impl RenderSession<'_> {
     /// does), binds the kernels to the session's buffers and warms the integrator's cache up
     /// (blocking, on illum's queue): the host's passes must have completed.
     fn refresh(&mut self) -> Result<()> {
-        let gpu = &self.prepared.gpu;
-        let mut f = gpu.frame;
-        crate::gpu_scene::set_camera(&mut f, &self.camera, gpu.origin);
-        integrator::select(&self.settings).configure(&mut f);
-        f.clamp_luminance = self.settings.clamp.unwrap_or(0.0);
-        f.nan_every = self.settings.inject_non_finite;
-        let kernels = self
+        let setup = self
+            .setup
+            .as_mut()
+            .expect("the setup lives as long as the session");
+        setup.configure(
+            &self.ctx,
+            self.prepared,
+            &self.camera,
+            &self.settings,
+            Schedule::Fixed,
+        )?;
+        let film = &self.film;
+        setup
             .kernels
-            .as_ref()
-            .expect("kernels live as long as the session");
-        kernels.configure(&self.ctx, self.prepared, &mut f, &self.settings)?;
-        kernels.bind(&self.frame, &self.film, self.aovs.as_ref());
-        self.frame_data = f;
+            .bind(&self.frame, &film.film, film.aovs.as_ref());
         self.warmup_seconds = 0.0;
-        if f.radiosity_table == 0 {
-            return Ok(()); // no cache: nothing to warm up
+        if !setup.kernels.stateful() {
+            return Ok(()); // no state to warm up
         }
         let warm = Instant::now();
         // The warm-up's update pass reads the frame constants from the buffer.
-        let (frame, data) = (self.frame.buffer, self.frame_data);
+        let (frame, data) = (self.frame.buffer, setup.frame);
         self.ctx.one_shot(|cmd| {
             // SAFETY: the frame buffer is the session's; one_shot waits for the command buffer.
             unsafe {
@@ -263,10 +222,16 @@ impl RenderSession<'_> {
                 barrier(&self.ctx.device, cmd);
             }
         })?;
-        // Samples [0, 1): brings the cache to the table every pass reads.
-        kernels.begin(&self.ctx, self.settings.seed, 0, 1)?;
+        // Samples [0, 1): brings the state to what every pass reads.
+        setup.kernels.begin(&self.ctx, self.settings.seed, 0, 1)?;
         self.warmup_seconds = warm.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    fn setup(&self) -> &Setup {
+        self.setup
+            .as_ref()
+            .expect("the setup lives as long as the session")
     }
 
     /// Moves the camera for the passes recorded from now on (same resolution); the next pass
@@ -276,8 +241,12 @@ impl RenderSession<'_> {
     pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
         check_extent(camera, &self.target)?;
         self.camera = camera.clone();
-        let gpu = &self.prepared.gpu;
-        crate::gpu_scene::set_camera(&mut self.frame_data, &self.camera, gpu.origin);
+        let origin = self.prepared.gpu.origin;
+        let setup = self
+            .setup
+            .as_mut()
+            .expect("the setup lives as long as the session");
+        crate::gpu_scene::set_camera(&mut setup.frame, &self.camera, origin);
         Ok(())
     }
 
@@ -305,27 +274,24 @@ impl RenderSession<'_> {
 
     /// The AOV planes the session's integrator writes (empty for `direct`).
     pub fn aov_planes(&self) -> &'static [&'static str] {
-        self.aov_planes
+        self.setup().aov_planes
     }
 
     /// From the next pass on, also resolves AOV plane `plane` into the host's `target` (same
     /// contract as the beauty's). The host's pending passes must have completed.
     pub fn add_aov_target(&mut self, plane: &str, target: TargetImage) -> Result<()> {
-        let index = self
-            .aov_planes
-            .iter()
-            .position(|p| *p == plane)
-            .ok_or_else(|| {
-                Error::Invalid(format!(
-                    "AOV plane {plane:?}: the {} integrator writes {}",
-                    self.integrator,
-                    if self.aov_planes.is_empty() {
-                        "none".to_string()
-                    } else {
-                        self.aov_planes.join(", ")
-                    }
-                ))
-            })? as u32;
+        let (name, planes) = (self.setup().integrator.name(), self.setup().aov_planes);
+        let index = planes.iter().position(|p| *p == plane).ok_or_else(|| {
+            Error::Invalid(format!(
+                "AOV plane {plane:?}: the {} integrator writes {}",
+                name,
+                if planes.is_empty() {
+                    "none".to_string()
+                } else {
+                    planes.join(", ")
+                }
+            ))
+        })? as u32;
         if self.aov_targets.iter().any(|t| t.0 == index) {
             return Err(Error::Invalid(format!(
                 "AOV plane {plane:?} already has a target"
@@ -334,6 +300,7 @@ impl RenderSession<'_> {
         check_extent(&self.camera, &target)
             .map_err(|e| Error::Invalid(format!("AOV plane {plane:?}: {e}")))?;
         let aovs = self
+            .film
             .aovs
             .as_ref()
             .expect("an integrator with planes has the buffer");
@@ -379,43 +346,26 @@ impl RenderSession<'_> {
             .checked_add(pass.sample_count)
             .ok_or_else(|| Error::Invalid("pass sample range overflows".into()))?;
         let dev = &self.ctx.device;
-        let kernels = self
-            .kernels
-            .as_ref()
-            .expect("kernels live as long as the session");
+        let setup = self.setup();
+        let kernels = &setup.kernels;
         let (w, h) = (self.camera.width, self.camera.height);
         // SAFETY: the caller guarantees a recording command buffer; every buffer and pipeline
         // recorded here belongs to the session, which outlives the command buffer's execution.
         unsafe {
             barrier(dev, cmd);
             if restart {
-                dev.cmd_fill_buffer(cmd, self.film.buffer, 0, vk::WHOLE_SIZE, 0);
-                if let Some(a) = &self.aovs {
+                dev.cmd_fill_buffer(cmd, self.film.film.buffer, 0, vk::WHOLE_SIZE, 0);
+                if let Some(a) = &self.film.aovs {
                     dev.cmd_fill_buffer(cmd, a.buffer, 0, vk::WHOLE_SIZE, 0);
                 }
             }
-            dev.cmd_update_buffer(
-                cmd,
-                self.frame.buffer,
-                0,
-                bytemuck::bytes_of(&self.frame_data),
-            );
+            dev.cmd_update_buffer(cmd, self.frame.buffer, 0, bytemuck::bytes_of(&setup.frame));
             barrier(dev, cmd);
-            const TILE: u32 = 512;
             let mut s = pass.first_sample;
             while s < end {
                 let n = self.per_dispatch.min(end - s);
-                for y0 in (0..h).step_by(TILE as usize) {
-                    for x0 in (0..w).step_by(TILE as usize) {
-                        let pc = PassConstants {
-                            first_sample: s,
-                            sample_count: n,
-                            seed_lo: self.settings.seed as u32,
-                            seed_hi: (self.settings.seed >> 32) as u32,
-                            tile: [x0, y0, TILE.min(w - x0), TILE.min(h - y0)],
-                        };
-                        kernels.record(cmd, &pc);
-                    }
+                for pc in tiles(Window::full(w, h), s, n, self.settings.seed) {
+                    kernels.record(cmd, &pc);
                 }
                 barrier(dev, cmd);
                 s += n;
@@ -428,7 +378,7 @@ impl RenderSession<'_> {
                 [w.div_ceil(WORKGROUP_X), h.div_ceil(WORKGROUP_Y), 1],
             );
             image_barrier(dev, cmd, t.image, &GENERAL_WRITE, &t.after);
-            let planes = self.aov_planes.len() as u32;
+            let planes = setup.aov_planes.len() as u32;
             for (plane, t, resolve) in &self.aov_targets {
                 image_barrier(dev, cmd, t.image, &t.before, &GENERAL_WRITE);
                 resolve.dispatch(
@@ -446,9 +396,8 @@ impl RenderSession<'_> {
 
 impl Drop for RenderSession<'_> {
     fn drop(&mut self) {
-        if let Some(k) = self.kernels.take() {
-            self.prepared
-                .keep_kernels(self.integrator, self.features, k);
+        if let Some(setup) = self.setup.take() {
+            setup.keep(self.prepared);
         }
     }
 }

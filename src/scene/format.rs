@@ -45,32 +45,19 @@ pub struct SceneFile {
     pub integrator: Option<IntegratorDef>,
 }
 
-/// Integrator defaults of a scene (`illum render --integrator` and its options override them).
-#[derive(Debug, Clone, Copy, Default, serde::Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
+/// Integrator defaults of a scene (`illum render --integrator` and its options override them):
+/// its name and its parameters, each read by the integrator it names (docs/scene-format.md lists
+/// them), which refuses a name it does not take.
+#[derive(Debug, Clone, Default, serde::Deserialize, JsonSchema)]
 pub struct IntegratorDef {
     /// direct (direct lighting only), full (direct + radiosity cache + reflection) or path
-    /// (brute-force path tracer).
+    /// (brute-force path tracer); default direct.
     #[serde(rename = "type")]
-    pub kind: Option<IntegratorKindDef>,
-    /// path: most path segments (Mitsuba's max_depth; -1 = unbounded).
-    pub max_depth: Option<i32>,
-    /// full: most specular bounces of the reflection integrator.
-    pub specular_depth: Option<u32>,
-    /// full: indirect diffuse through the radiosity cache (false: brute force).
-    pub radiosity_cache: Option<bool>,
-}
-
-/// Integrator kind.
-#[derive(Debug, Clone, Copy, serde::Deserialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum IntegratorKindDef {
-    /// Emission seen directly plus direct lighting.
-    Direct,
-    /// Direct lighting, indirect diffuse through the radiosity cache, and reflections.
-    Full,
-    /// Unidirectional path tracing (all light paths).
-    Path,
+    pub kind: Option<String>,
+    /// The integrator's parameters (e.g. `max_depth`, `light_samples`): numbers, booleans or
+    /// strings.
+    #[serde(flatten)]
+    pub params: std::collections::BTreeMap<String, serde_json::Value>,
 }
 
 /// Camera: either the look-at form (`position`, `look_at`, `fov_y`) or the glTF form (`gltf`).

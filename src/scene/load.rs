@@ -173,23 +173,36 @@ pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<S
         lights: p.lights,
         description: file.description.clone(),
         source: None,
-        integrator: file.integrator.map(integrator_choice).unwrap_or_default(),
+        integrator: match &file.integrator {
+            Some(d) => integrator_choice(origin, d)?,
+            None => IntegratorChoice::default(),
+        },
     })
 }
 
-fn integrator_choice(d: super::format::IntegratorDef) -> IntegratorChoice {
-    use super::format::IntegratorKindDef as K;
-    use crate::render::IntegratorKind;
-    IntegratorChoice {
-        kind: d.kind.map(|k| match k {
-            K::Direct => IntegratorKind::Direct,
-            K::Full => IntegratorKind::Full,
-            K::Path => IntegratorKind::Path,
-        }),
-        max_depth: d.max_depth,
-        specular_depth: d.specular_depth,
-        radiosity_cache: d.radiosity_cache,
+/// The integrator section as text; the integrator it names reads (and checks) the values.
+fn integrator_choice(origin: &str, d: &super::format::IntegratorDef) -> Result<IntegratorChoice> {
+    let mut params = Vec::new();
+    for (name, v) in &d.params {
+        let text = match v {
+            serde_json::Value::Bool(b) => b.to_string(),
+            serde_json::Value::Number(n) => n.to_string(),
+            serde_json::Value::String(s) => s.clone(),
+            _ => {
+                return Err(SceneError::invalid(
+                    origin,
+                    format!("integrator.{name}"),
+                    v,
+                    "an integrator parameter is a number, a boolean or a string",
+                ));
+            }
+        };
+        params.push((name.clone(), text));
     }
+    Ok(IntegratorChoice {
+        name: d.kind.clone(),
+        params,
+    })
 }
 
 pub(crate) struct Builder<'a> {

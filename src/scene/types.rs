@@ -30,13 +30,13 @@ pub struct Scene {
     pub integrator: IntegratorChoice,
 }
 
-/// A scene's integrator defaults (each field: None = the renderer's default).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// A scene's integrator defaults: the integrator's name (None: the renderer's default) and its
+/// parameters as text, which the integrator reads (`crate::integrators`).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct IntegratorChoice {
-    pub kind: Option<crate::render::IntegratorKind>,
-    pub max_depth: Option<i32>,
-    pub specular_depth: Option<u32>,
-    pub radiosity_cache: Option<bool>,
+    pub name: Option<String>,
+    /// (name, value) in the file's order of names (sorted).
+    pub params: Vec<(String, String)>,
 }
 
 #[derive(Clone, Debug)]

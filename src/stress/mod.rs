@@ -7,7 +7,8 @@ pub mod closed_form;
 pub mod many_lights;
 
 use crate::error::{Error, Result};
-use crate::render::{IntegratorSettings, RenderSettings, Renderer, Technique};
+use crate::integrators::{Direct, DirectLighting, Technique};
+use crate::render::{RenderSettings, Renderer};
 use crate::scene::Scene;
 use crate::trace::TraceMode;
 use std::fmt::Write as _;
@@ -95,10 +96,11 @@ impl Case {
             }
             Reference::Technique(t) => {
                 let settings = RenderSettings {
-                    integrator: IntegratorSettings {
+                    integrator: Direct(DirectLighting {
                         technique: t,
                         ..Default::default()
-                    },
+                    })
+                    .into(),
                     spp,
                     seed: 0x5eed_f4ef,
                     ..Default::default()

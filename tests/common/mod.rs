@@ -3,7 +3,8 @@
 //! `ILLUM_TEST_DEVICE` the device.
 #![allow(dead_code)]
 
-use illum::render::{IntegratorSettings, RenderOutput, RenderSettings, Renderer};
+use illum::integrators::Direct;
+use illum::render::{Integrator, RenderOutput, RenderSettings, Renderer};
 use illum::scene::Scene;
 use illum::trace::TraceMode;
 use illum::vk::{Context, ContextOptions};
@@ -173,13 +174,13 @@ impl Batches {
 /// Renders `spp` samples per pixel of `json` in BATCHES independent renders on a fresh validated
 /// context, and checks that validation stayed silent.
 pub fn render_batches(json: &str, spp: u32, seed: u64) -> Batches {
-    render_batches_with(&scene(json), IntegratorSettings::default(), spp, seed)
+    render_batches_with(&scene(json), Direct::default(), spp, seed)
 }
 
 /// The same for a loaded scene and integrator settings.
 pub fn render_batches_with(
     scene: &Scene,
-    integrator: IntegratorSettings,
+    integrator: impl Into<std::sync::Arc<dyn Integrator>>,
     spp: u32,
     seed: u64,
 ) -> Batches {
@@ -188,7 +189,7 @@ pub fn render_batches_with(
         spp,
         seed,
         trace: trace_mode(),
-        integrator,
+        integrator: integrator.into(),
         ..Default::default()
     };
     let b = Batches::render(&Renderer::new(ctx.clone()), scene, &settings, BATCHES);

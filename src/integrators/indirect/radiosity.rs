@@ -39,7 +39,7 @@
 
 use crate::error::{Error, Result};
 use crate::layout::*;
-use crate::render::direct::tile_groups;
+use crate::render::film_kernel::tile_groups;
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
 use ash::vk;
 use std::cell::{self, RefCell};

@@ -6,11 +6,11 @@
 
 mod radiosity;
 
-use super::direct::{bind_film, configure_direct, dispatch_tile, film_pipeline, tile_groups};
-use super::integrator::{Integrator, IntegratorPasses};
-use super::{IntegratorSettings, PreparedScene, RenderSettings};
+use super::direct::DirectLighting;
 use crate::error::Result;
 use crate::layout::*;
+use crate::render::film_kernel::{bind_film, dispatch_tile, film_pipeline, tile_groups};
+use crate::render::{Integrator, IntegratorPasses, Params, PreparedScene, Schedule};
 use crate::shaders;
 use crate::vk::{Buffer, ComputePipeline, Context};
 use ash::vk;
@@ -18,7 +18,7 @@ use radiosity::{CacheShape, RadiosityCache};
 use std::cell::RefCell;
 
 /// The AOV planes of both integrators, in the kernels' order.
-const PLANES: &[&str] = &["Direct", "IndirectDiffuse", "Reflection"];
+pub const PLANES: &[&str] = &["Direct", "IndirectDiffuse", "Reflection"];
 
 /// Spread angle (radians) of the cone a diffuse bounce starts: a cache cell read at distance t
 /// is at most 0.15 t across, a ~9 degree blur of what the bounce integrates over its whole
@@ -27,7 +27,37 @@ const PLANES: &[&str] = &["Direct", "IndirectDiffuse", "Reflection"];
 const DIFFUSE_SPREAD: f32 = 0.15;
 
 /// The brute-force path tracer.
-pub struct Path(pub IntegratorSettings);
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Path {
+    pub lighting: DirectLighting,
+    /// The most path segments, as Mitsuba's `max_depth` (1: emission seen directly, 2: direct
+    /// lighting); -1: unbounded (Russian roulette ends paths).
+    pub max_depth: i32,
+}
+
+impl Default for Path {
+    fn default() -> Self {
+        Path {
+            lighting: DirectLighting::default(),
+            max_depth: -1,
+        }
+    }
+}
+
+impl Path {
+    pub const PARAMS: &[&str] = &["max_depth"];
+
+    pub fn parse(p: &Params) -> std::result::Result<Path, String> {
+        let d = Path::default();
+        let it = Path {
+            lighting: DirectLighting::parse(p)?,
+            max_depth: p.get("max_depth", d.max_depth)?,
+        };
+        it.check()?;
+        p.finish("path", &[Path::PARAMS, DirectLighting::PARAMS].concat())?;
+        Ok(it)
+    }
+}
 
 impl Integrator for Path {
     fn name(&self) -> &'static str {
@@ -38,21 +68,44 @@ impl Integrator for Path {
         PLANES
     }
 
+    fn check(&self) -> std::result::Result<(), String> {
+        if self.max_depth == 0 || self.max_depth < -1 {
+            return Err(format!(
+                "--max-depth counts path segments: -1 (unbounded) or at least 1, got {}",
+                self.max_depth
+            ));
+        }
+        self.lighting.check()
+    }
+
     fn configure(&self, frame: &mut Frame) {
-        configure_direct(&self.0, frame);
-        frame.max_depth = u32::try_from(self.0.max_depth).unwrap_or(NONE);
+        self.lighting.configure(frame);
+        frame.max_depth = u32::try_from(self.max_depth).unwrap_or(NONE);
         frame.diffuse_spread = DIFFUSE_SPREAD;
     }
 
     fn features(&self) -> u32 {
-        self.0.kernel_features()
+        self.lighting.kernel_features()
+    }
+
+    fn identity(&self) -> String {
+        self.lighting
+            .identity("path", &format!("max_depth={} ", self.max_depth))
+    }
+
+    fn header(&self) -> Vec<(String, String)> {
+        self.lighting.header()
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
         Ok(Box::new(FilmKernel(film_pipeline(
             ctx,
             scene,
-            self.0.kernel_features(),
+            self.lighting.kernel_features(),
             "path",
             (shaders::PATH_RQ, shaders::PATH_BVH),
             true,
@@ -74,7 +127,46 @@ impl IntegratorPasses for FilmKernel {
 }
 
 /// Direct lighting, indirect diffuse through the radiosity cache, and reflections.
-pub struct Full(pub IntegratorSettings);
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Full {
+    pub lighting: DirectLighting,
+    /// The most specular bounces of the reflection integrator.
+    pub specular_depth: u32,
+    /// Indirect diffuse through the radiosity cache (false: by brute force, the same partition
+    /// without the cache, to measure its bias and gain).
+    pub radiosity_cache: bool,
+    /// New cache generations during the render, at samples 1, 2, 4, … (false: the warm-up's
+    /// table serves every sample, as in a render session; src/render/session.rs).
+    pub radiosity_refresh: bool,
+}
+
+impl Default for Full {
+    fn default() -> Self {
+        Full {
+            lighting: DirectLighting::default(),
+            specular_depth: 4,
+            radiosity_cache: true,
+            radiosity_refresh: true,
+        }
+    }
+}
+
+impl Full {
+    pub const PARAMS: &[&str] = &["specular_depth", "radiosity_cache", "radiosity_refresh"];
+
+    pub fn parse(p: &Params) -> std::result::Result<Full, String> {
+        let d = Full::default();
+        let it = Full {
+            lighting: DirectLighting::parse(p)?,
+            specular_depth: p.get("specular_depth", d.specular_depth)?,
+            radiosity_cache: p.get_switch("radiosity_cache", d.radiosity_cache)?,
+            radiosity_refresh: p.get_switch("radiosity_refresh", d.radiosity_refresh)?,
+        };
+        it.check()?;
+        p.finish("full", &[Full::PARAMS, DirectLighting::PARAMS].concat())?;
+        Ok(it)
+    }
+}
 
 impl Integrator for Full {
     fn name(&self) -> &'static str {
@@ -85,14 +177,47 @@ impl Integrator for Full {
         PLANES
     }
 
+    fn check(&self) -> std::result::Result<(), String> {
+        if self.specular_depth > 64 {
+            return Err(format!(
+                "--specular-depth must be in 0..=64, got {}",
+                self.specular_depth
+            ));
+        }
+        self.lighting.check()
+    }
+
     fn configure(&self, frame: &mut Frame) {
-        configure_direct(&self.0, frame);
-        frame.specular_depth = self.0.specular_depth;
+        self.lighting.configure(frame);
+        frame.specular_depth = self.specular_depth;
         frame.diffuse_spread = DIFFUSE_SPREAD;
     }
 
     fn features(&self) -> u32 {
-        self.0.kernel_features()
+        self.lighting.kernel_features()
+    }
+
+    fn identity(&self) -> String {
+        let own = format!(
+            "specular_depth={} radiosity_cache={} {}",
+            self.specular_depth,
+            if self.radiosity_cache { "on" } else { "off" },
+            // Named only when off, so that parts of earlier versions keep their text.
+            if self.radiosity_refresh {
+                ""
+            } else {
+                "radiosity_refresh=off "
+            }
+        );
+        self.lighting.identity("full", &own)
+    }
+
+    fn header(&self) -> Vec<(String, String)> {
+        self.lighting.header()
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
@@ -100,7 +225,7 @@ impl Integrator for Full {
         let kernel = film_pipeline(
             ctx,
             scene,
-            self.0.kernel_features(),
+            self.lighting.kernel_features(),
             "full",
             (shaders::FULL_RQ, shaders::FULL_BVH),
             true,
@@ -129,12 +254,17 @@ impl IntegratorPasses for FullKernels {
         ctx: &Context,
         scene: &PreparedScene,
         frame: &mut Frame,
-        settings: &RenderSettings,
+        integrator: &dyn Integrator,
+        schedule: Schedule,
     ) -> Result<()> {
+        let full = integrator
+            .as_any()
+            .downcast_ref::<Full>()
+            .expect("the full integrator's kernels run for it");
         // Leave the cache out where nothing could read it: no diffuse material or no light.
-        let reason = if !settings.integrator.radiosity_cache {
+        let reason = if !full.radiosity_cache {
             "off (--radiosity-cache off: brute force)"
-        } else if !(scene.max_albedo > 0.0 && scene.gpu.emitters > 0) {
+        } else if !(scene.max_albedo > 0.0 && scene.emitters() > 0) {
             "off (no diffuse material or no light: nothing to cache)"
         } else {
             ""
@@ -154,13 +284,18 @@ impl IntegratorPasses for FullKernels {
         }
         let c = cache.as_ref().expect("created above");
         c.configure(frame);
-        c.set_refresh(settings.integrator.radiosity_refresh);
+        // Recorded passes cannot refresh the cache (src/render/session.rs).
+        c.set_refresh(full.radiosity_refresh && schedule == Schedule::Progressive);
         c.reset();
         Ok(())
     }
 
     fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
         bind_film(&self.kernel, frame, film, aovs);
+    }
+
+    fn stateful(&self) -> bool {
+        self.off_reason.borrow().is_empty() && self.cache.borrow().is_some()
     }
 
     fn begin(&self, ctx: &Context, seed: u64, first: u32, count: u32) -> Result<u32> {

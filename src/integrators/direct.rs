@@ -1,0 +1,379 @@
+//! The direct-lighting integrator (glsl/primary.comp, glsl/shared/direct.glsl): camera rays, the
+//! AOVs, and emission plus direct lighting at the first hit, estimated as "Physically Based
+//! Lighting at Pixar" does (docs/techniques.md, "The direct-lighting estimator"). Its parameters,
+//! [`DirectLighting`], light every integrator's camera hits.
+
+use crate::error::Result;
+use crate::layout::*;
+use crate::render::film_kernel::{bind_film, dispatch_tile, film_pipeline};
+use crate::render::{Integrator, IntegratorPasses, Params, PreparedScene};
+use crate::shaders;
+use crate::vk::{Buffer, ComputePipeline, Context};
+use ash::vk;
+
+/// How direct lighting is estimated (docs/techniques.md, "The direct-lighting estimator").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Technique {
+    /// BRDF sampling only: lights are found by the BRDF samples that hit them.
+    Brdf,
+    /// Light sampling only (delta lobes then see no light).
+    Light,
+    /// Both, combined by multiple importance sampling with the power heuristic.
+    #[default]
+    Mis,
+}
+
+impl Technique {
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::Brdf => "brdf",
+            Technique::Light => "light",
+            Technique::Mis => "mis",
+        }
+    }
+}
+
+impl std::str::FromStr for Technique {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "brdf" => Ok(Technique::Brdf),
+            "light" => Ok(Technique::Light),
+            "mis" => Ok(Technique::Mis),
+            _ => Err(format!(
+                "unknown technique {s:?} (expected brdf, light or mis)"
+            )),
+        }
+    }
+}
+
+/// How light samples pick lights when a scene has more than DIRECT_LOOP_LIGHTS of them
+/// (the direct-lighting kernel).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSelection {
+    /// Descend the light tree (docs/techniques.md, "The light tree"): O(log n) per sample.
+    #[default]
+    Tree,
+    /// The former linear scan of a CDF over every light: O(n) per shading point (for comparison).
+    Scan,
+    /// Loop over every light at every shading point, each with its own samples (brute force).
+    Loop,
+}
+
+impl LightSelection {
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSelection::Tree => "tree",
+            LightSelection::Scan => "scan",
+            LightSelection::Loop => "loop",
+        }
+    }
+}
+
+impl std::str::FromStr for LightSelection {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "tree" => Ok(LightSelection::Tree),
+            "scan" => Ok(LightSelection::Scan),
+            "loop" => Ok(LightSelection::Loop),
+            _ => Err(format!(
+                "unknown light selection {s:?} (expected tree, scan or loop)"
+            )),
+        }
+    }
+}
+
+/// Control variates for the diffuse light samples of the looped lights (docs/techniques.md,
+/// "Control variates"; glsl/shared/direct.glsl): the analytic unshadowed irradiance scaled by a
+/// visibility estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ControlVariates {
+    #[default]
+    Off,
+    /// The course's average visibility: biased (−Cov/N), consistent.
+    AvgVis,
+    /// Leave-one-out average visibility: unbiased.
+    Loo,
+}
+
+impl ControlVariates {
+    pub fn name(self) -> &'static str {
+        match self {
+            ControlVariates::Off => "off",
+            ControlVariates::AvgVis => "avgvis",
+            ControlVariates::Loo => "loo",
+        }
+    }
+}
+
+impl std::str::FromStr for ControlVariates {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "off" => Ok(ControlVariates::Off),
+            "avgvis" => Ok(ControlVariates::AvgVis),
+            "loo" => Ok(ControlVariates::Loo),
+            _ => Err(format!(
+                "unknown control variates {s:?} (expected off, avgvis or loo)"
+            )),
+        }
+    }
+}
+
+/// How camera hits are lit: the direct-lighting estimator's sample counts and switches, shared
+/// by every integrator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectLighting {
+    pub technique: Technique,
+    /// Most light samples per light and camera sample; each light takes
+    /// ceil(its solid-angle share of the hemisphere × this), at least 1 (the course's rule).
+    pub light_samples: u32,
+    /// BRDF samples per specular lobe (and for the diffuse lobe under BRDF sampling or diffuse MIS).
+    pub brdf_samples: u32,
+    /// Diffuse also by MIS with cosine-sampled BRDF samples (the course: light samples only).
+    pub diffuse_mis: bool,
+    /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
+    pub light_selection: LightSelection,
+    /// Share of each group's shadow-ray candidates that get shadow rays, picked by systematic
+    /// resampling on their unshadowed luminance (docs/techniques.md, "Shadow resampling"); 1: all,
+    /// as without it.
+    pub shadow_resample: f32,
+    /// Russian roulette on each candidate before its shadow ray: kept with probability
+    /// min(1, luminance / this), then divided by it (docs/techniques.md, "Shadow culling"); 0: off.
+    pub shadow_cull: f32,
+    /// Control variates for diffuse light samples (off: none).
+    pub control_variates: ControlVariates,
+}
+
+impl Default for DirectLighting {
+    fn default() -> Self {
+        DirectLighting {
+            technique: Technique::Mis,
+            light_samples: 4,
+            brdf_samples: 2,
+            diffuse_mis: false,
+            light_selection: LightSelection::Tree,
+            shadow_resample: 1.0,
+            shadow_cull: 0.0,
+            control_variates: ControlVariates::Off,
+        }
+    }
+}
+
+impl DirectLighting {
+    /// The parameters it reads.
+    pub const PARAMS: &[&str] = &[
+        "technique",
+        "light_samples",
+        "brdf_samples",
+        "diffuse_mis",
+        "light_selection",
+        "shadow_resample",
+        "shadow_cull",
+        "control_variates",
+    ];
+
+    /// Reads its parameters from `p` (the defaults for those not given) and checks them.
+    pub fn parse(p: &Params) -> std::result::Result<DirectLighting, String> {
+        let d = DirectLighting::default();
+        let it = DirectLighting {
+            technique: p.get("technique", d.technique)?,
+            light_samples: p.get("light_samples", d.light_samples)?,
+            brdf_samples: p.get("brdf_samples", d.brdf_samples)?,
+            diffuse_mis: p.get_switch("diffuse_mis", d.diffuse_mis)?,
+            light_selection: p.get("light_selection", d.light_selection)?,
+            shadow_resample: p.get("shadow_resample", d.shadow_resample)?,
+            shadow_cull: p.get("shadow_cull", d.shadow_cull)?,
+            control_variates: p.get("control_variates", d.control_variates)?,
+        };
+        it.check()?;
+        Ok(it)
+    }
+
+    pub fn check(&self) -> std::result::Result<(), String> {
+        if !(1..=64).contains(&self.light_samples) || !(1..=64).contains(&self.brdf_samples) {
+            return Err(format!(
+                "light and BRDF sample counts must be in 1..=64, got {} and {}",
+                self.light_samples, self.brdf_samples
+            ));
+        }
+        if !(self.shadow_resample > 0.0 && self.shadow_resample <= 1.0) {
+            return Err(format!(
+                "the shadow resample share must be in (0, 1], got {}",
+                self.shadow_resample
+            ));
+        }
+        if !(self.shadow_cull >= 0.0 && self.shadow_cull.is_finite()) {
+            return Err(format!(
+                "the shadow cull threshold must be finite and at least 0, got {}",
+                self.shadow_cull
+            ));
+        }
+        if self.control_variates != ControlVariates::Off
+            && (self.shadow_resample < 1.0 || self.shadow_cull > 0.0)
+        {
+            return Err(
+                "control variates need every light sample's shadow ray: they do not \
+                        combine with --shadow-resample or --shadow-cull"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+
+    /// The feature bits these settings add to the scene's in every kernel that lights with
+    /// direct_lighting (code for what is off is left out).
+    pub fn kernel_features(&self) -> u32 {
+        let mut f = 0;
+        if self.shadow_resample < 1.0 {
+            f |= FEATURE_SHADOW_RESAMPLE;
+        }
+        if self.shadow_cull > 0.0 {
+            f |= FEATURE_SHADOW_CULL;
+        }
+        if self.control_variates != ControlVariates::Off {
+            f |= FEATURE_CONTROL_VARIATES;
+        }
+        f
+    }
+
+    /// Writes them into the frame constants.
+    pub fn configure(&self, frame: &mut Frame) {
+        frame.technique = match self.technique {
+            Technique::Brdf => TECHNIQUE_BRDF,
+            Technique::Light => TECHNIQUE_LIGHT,
+            Technique::Mis => TECHNIQUE_MIS,
+        };
+        frame.light_samples = self.light_samples;
+        frame.brdf_samples = self.brdf_samples;
+        frame.integrator_flags = if self.diffuse_mis {
+            INTEGRATOR_DIFFUSE_MIS
+        } else {
+            0
+        };
+        frame.shadow_resample = self.shadow_resample;
+        frame.shadow_cull = self.shadow_cull;
+        frame.control_variates = match self.control_variates {
+            ControlVariates::Off => 0,
+            ControlVariates::AvgVis => CONTROL_VARIATES_AVGVIS,
+            ControlVariates::Loo => CONTROL_VARIATES_LOO,
+        };
+        // Without finite lights there is no tree: the (infinite) lights are looped over.
+        frame.light_select = match self.light_selection {
+            LightSelection::Tree if frame.light_tree != 0 => LIGHT_SELECT_TREE,
+            LightSelection::Scan => LIGHT_SELECT_SCAN,
+            _ => LIGHT_SELECT_LOOP,
+        };
+    }
+
+    /// Its part of an integrator's identity, after the integrator's own parameters.
+    pub fn identity(&self, integrator: &str, own: &str) -> String {
+        format!(
+            "integrator={integrator} {own}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} shadow_resample={} shadow_cull={} control_variates={}",
+            self.technique.name(),
+            self.light_samples,
+            self.brdf_samples,
+            self.diffuse_mis,
+            self.light_selection.name(),
+            self.shadow_resample,
+            self.shadow_cull,
+            self.control_variates.name(),
+        )
+    }
+
+    /// Its EXR header attributes.
+    pub fn header(&self) -> Vec<(String, String)> {
+        vec![
+            ("technique".into(), self.technique.name().into()),
+            ("lightSamples".into(), self.light_samples.to_string()),
+            ("brdfSamples".into(), self.brdf_samples.to_string()),
+            ("diffuseMIS".into(), self.diffuse_mis.to_string()),
+            ("shadowResample".into(), self.shadow_resample.to_string()),
+            ("shadowCull".into(), self.shadow_cull.to_string()),
+            (
+                "controlVariates".into(),
+                self.control_variates.name().into(),
+            ),
+        ]
+    }
+}
+
+/// Direct lighting with the course's sample counts and MIS.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Direct(pub DirectLighting);
+
+impl Direct {
+    pub fn parse(p: &Params) -> std::result::Result<Direct, String> {
+        let d = Direct(DirectLighting::parse(p)?);
+        p.finish("direct", DirectLighting::PARAMS)?;
+        Ok(d)
+    }
+}
+
+impl Integrator for Direct {
+    fn name(&self) -> &'static str {
+        "direct"
+    }
+
+    fn check(&self) -> std::result::Result<(), String> {
+        self.0.check()
+    }
+
+    fn configure(&self, frame: &mut Frame) {
+        self.0.configure(frame);
+    }
+
+    fn features(&self) -> u32 {
+        self.0.kernel_features()
+    }
+
+    fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
+        Ok(Box::new(PrimaryKernel::new(
+            ctx,
+            scene,
+            self.0.kernel_features(),
+        )?))
+    }
+
+    fn identity(&self) -> String {
+        self.0.identity("direct", "")
+    }
+
+    fn header(&self) -> Vec<(String, String)> {
+        self.0.header()
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+pub struct PrimaryKernel {
+    pipeline: ComputePipeline,
+}
+
+impl PrimaryKernel {
+    pub fn new(ctx: &Context, scene: &PreparedScene, features: u32) -> Result<PrimaryKernel> {
+        let pipeline = film_pipeline(
+            ctx,
+            scene,
+            features,
+            "primary",
+            (shaders::PRIMARY_RQ, shaders::PRIMARY_BVH),
+            false,
+            std::mem::size_of::<PassConstants>(),
+        )?;
+        Ok(PrimaryKernel { pipeline })
+    }
+}
+
+impl IntegratorPasses for PrimaryKernel {
+    fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
+        bind_film(&self.pipeline, frame, film, aovs);
+    }
+
+    fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
+        dispatch_tile(&self.pipeline, cmd, pass);
+    }
+}

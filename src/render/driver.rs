@@ -1,0 +1,441 @@
+//! The one driver behind every render: the blocking render ([`super::Renderer::render`]) and
+//! recorded sessions (src/render/session.rs) set up through the same stages here — the
+//! integrator's kernels, the frame constants, the device film, the warm-up dispatch — and split
+//! each dispatch into the same tiles, so that embedding and the command line cannot drift.
+
+use super::{Integrator, IntegratorPasses, PreparedScene, RenderSettings, Schedule};
+use crate::error::{Error, Result};
+use crate::film::{self, AOV_CHANNELS, Window};
+use crate::layout::*;
+use crate::scene::Camera;
+use crate::trace::TraceMode;
+use crate::vk::{Buffer, Context, MemoryLocation};
+use ash::vk;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Tiles of at most this many pixels a side: one dispatch each.
+pub const TILE: u32 = 512;
+
+/// Fails when the render asks for another trace path than the scene was prepared for.
+pub fn check_trace(prepared: &PreparedScene, mode: TraceMode) -> Result<()> {
+    let wanted = match mode {
+        TraceMode::Auto => return Ok(()),
+        TraceMode::RayQuery => "rayquery",
+        TraceMode::Bvh => "bvh",
+    };
+    if wanted != prepared.trace.name() {
+        return Err(Error::Invalid(format!(
+            "the scene was prepared for the {} trace path, the render asks for {wanted}",
+            prepared.trace.name()
+        )));
+    }
+    Ok(())
+}
+
+/// An integrator with its kernels, configured for one render.
+pub struct Setup {
+    pub integrator: Arc<dyn Integrator>,
+    pub kernels: Box<dyn IntegratorPasses>,
+    /// The frame constants: scene, camera, integrator and the settings' clamp and test hooks.
+    pub frame: Frame,
+    pub aov_planes: &'static [&'static str],
+}
+
+impl Setup {
+    /// Takes the kernels a prepared scene kept for the settings' integrator (else creates them)
+    /// and writes the frame constants of a render through `camera`.
+    pub fn new(
+        ctx: &Context,
+        prepared: &PreparedScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        schedule: Schedule,
+    ) -> Result<Setup> {
+        let integrator = settings.integrator.clone();
+        let aov_planes = integrator.aov_planes();
+        film::check_aov_names(aov_planes)
+            .map_err(|e| Error::Invalid(format!("integrator {}: {e}", integrator.name())))?;
+        let kernels = match prepared.take_kernels(integrator.name(), integrator.features()) {
+            Some(k) => k,
+            None => integrator.kernels(ctx, prepared)?,
+        };
+        let mut setup = Setup {
+            integrator,
+            kernels,
+            frame: Frame::default(),
+            aov_planes,
+        };
+        setup.configure(ctx, prepared, camera, settings, schedule)?;
+        Ok(setup)
+    }
+
+    /// Writes the frame constants again (after a scene update, say).
+    pub fn configure(
+        &mut self,
+        ctx: &Context,
+        prepared: &PreparedScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        schedule: Schedule,
+    ) -> Result<()> {
+        let gpu = &prepared.gpu;
+        let mut f = gpu.frame;
+        crate::gpu_scene::set_camera(&mut f, camera, gpu.origin);
+        self.integrator.configure(&mut f);
+        f.clamp_luminance = settings.clamp.unwrap_or(0.0);
+        f.nan_every = settings.inject_non_finite;
+        self.kernels
+            .configure(ctx, prepared, &mut f, &*self.integrator, schedule)?;
+        self.frame = f;
+        Ok(())
+    }
+
+    /// Gives the kernels back to the prepared scene for later renders.
+    pub fn keep(self, prepared: &PreparedScene) {
+        let i = &self.integrator;
+        prepared.keep_kernels(i.name(), i.features(), self.kernels);
+    }
+
+    /// One empty dispatch: drivers may compile the pipeline at its first dispatch (llvmpipe
+    /// does: up to a second for `direct`, tens for `full`), which would otherwise be charged to
+    /// the first pass. Returns its wall time.
+    pub fn warm_up(&self, ctx: &Context) -> Result<f64> {
+        let (warm, warm_cpu) = (Instant::now(), crate::vk::process_cpu_seconds());
+        ctx.one_shot(|cmd| {
+            self.kernels.record(
+                cmd,
+                &PassConstants {
+                    tile: [0, 0, 1, 1],
+                    ..Default::default()
+                },
+            )
+        })?;
+        let seconds = warm.elapsed().as_secs_f64();
+        if crate::vk::kernel_times() {
+            eprintln!(
+                "illum: warm-up dispatch of {}: {seconds:.3} s ({:.3} s of process CPU)",
+                self.integrator.name(),
+                crate::vk::process_cpu_seconds() - warm_cpu
+            );
+        }
+        Ok(seconds)
+    }
+}
+
+/// The device film of a render: FilmPixel sums, and the integrator's AOV planes (pixels x planes
+/// vec4 sums, [pixel][plane]) when it has any.
+pub struct FilmBuffers {
+    pub film: Buffer,
+    pub aovs: Option<Buffer>,
+    pub planes: usize,
+}
+
+impl FilmBuffers {
+    /// Buffers for `pixels` pixels and `planes` AOV planes; `label` names them for messages.
+    pub fn new(
+        ctx: &Context,
+        label: &str,
+        pixels: u64,
+        planes: usize,
+        usage: vk::BufferUsageFlags,
+    ) -> Result<FilmBuffers> {
+        let usage = usage | vk::BufferUsageFlags::STORAGE_BUFFER;
+        let film = ctx.create_buffer(
+            label,
+            pixels * std::mem::size_of::<FilmPixel>() as u64,
+            usage,
+            MemoryLocation::GpuOnly,
+        )?;
+        let aovs = match planes {
+            0 => None,
+            p => Some(ctx.create_buffer(
+                &format!("{label} aovs"),
+                pixels * p as u64 * (AOV_CHANNELS * 4) as u64,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?),
+        };
+        Ok(FilmBuffers { film, aovs, planes })
+    }
+
+    pub fn device(&self) -> film::DeviceFilm<'_> {
+        film::DeviceFilm {
+            film: &self.film,
+            aovs: self.aovs.as_ref(),
+            aov_planes: self.planes,
+        }
+    }
+}
+
+/// The push constants of each tile of `window` for samples [first, first + count) with `seed`,
+/// in the order they are dispatched.
+pub fn tiles(window: Window, first: u32, count: u32, seed: u64) -> Vec<PassConstants> {
+    let mut out = Vec::new();
+    for y0 in (window.y0..window.y1).step_by(TILE as usize) {
+        for x0 in (window.x0..window.x1).step_by(TILE as usize) {
+            out.push(PassConstants {
+                first_sample: first,
+                sample_count: count,
+                seed_lo: seed as u32,
+                seed_hi: (seed >> 32) as u32,
+                tile: [x0, y0, TILE.min(window.x1 - x0), TILE.min(window.y1 - y0)],
+            });
+        }
+    }
+    out
+}
+
+/// A blocking render's run over its seeds: set up once, then each seed renders into the same
+/// device film, its blocks moved into exact host sums as they complete (src/film/mod.rs).
+pub struct Blocking<'a> {
+    pub ctx: &'a Context,
+    pub settings: &'a RenderSettings,
+    pub setup: &'a Setup,
+    pub film: &'a FilmBuffers,
+    pub timer: Option<&'a crate::vk::GpuTimer>,
+    /// The image's width (the device film's row length).
+    pub width: u32,
+    /// The job's sample range and pixel window.
+    pub range: (u32, u32),
+    pub window: Window,
+    /// Samples per dispatch at most (1 where the driver cuts long loops short).
+    pub per_dispatch: u32,
+}
+
+/// Where one seed's render stands.
+struct Progress {
+    /// Samples done per pixel, from the first sample of the first block.
+    done: u32,
+    wall: f64,
+    device: f64,
+    interrupted: bool,
+    sums: film::FilmSums,
+    passes: Vec<super::PassReport>,
+    last_resolved: Option<film::Resolved>,
+}
+
+impl Blocking<'_> {
+    /// The samples this job renders: its range widened to whole blocks.
+    pub fn blocks(&self) -> (u32, u32) {
+        let spp = self.settings.spp;
+        (
+            film::block_of(self.range.0, spp).0,
+            film::block_of(self.range.1 - 1, spp).1,
+        )
+    }
+
+    fn cancelled(&self) -> bool {
+        self.settings
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// Renders with `seed` (the film cleared), calling `progress(done, budget)` after every
+    /// round of dispatches. Returns the sums, the pass reports, the resolved film, the wall and
+    /// device seconds, and whether the render was cancelled.
+    pub fn render_seed(&self, seed: u64, progress: &mut dyn FnMut(u32, u32)) -> Result<SeedOutput> {
+        let (first, last) = self.blocks();
+        let budget = last - first;
+        let evaluate = self.settings.evaluate_passes || self.settings.reference.is_some();
+        let planes: Vec<String> = self
+            .setup
+            .aov_planes
+            .iter()
+            .map(|p| p.to_string())
+            .collect();
+        let mut p = Progress {
+            done: 0,
+            wall: 0.0,
+            device: 0.0,
+            interrupted: false,
+            sums: film::FilmSums::new(self.window, planes.clone()),
+            passes: Vec::new(),
+            last_resolved: None,
+        };
+        while p.done < budget && !p.interrupted {
+            let Some(pass) = self.plan_pass(&p, budget) else {
+                break;
+            };
+            let start = Instant::now();
+            let from = first + p.done;
+            let k = self.render_pass(&mut p, seed, from, pass, budget, progress)?;
+            p.done += k;
+            let elapsed = start.elapsed().as_secs_f64();
+            p.wall += elapsed;
+            if self.timer.is_none() {
+                p.device += elapsed;
+            }
+            self.report_pass(&mut p, &planes, evaluate, first, last)?;
+        }
+        if p.done < budget {
+            // A time budget ended the render inside a block: keep what was rendered.
+            let block =
+                film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
+            p.sums.add_block(&block);
+        }
+        let resolved = match p.last_resolved.take() {
+            Some(r) if r.spp == p.done => r,
+            _ => film::resolve(
+                &p.sums.all_sums(),
+                &planes,
+                self.window.width(),
+                self.window.height(),
+                p.done,
+            ),
+        };
+        if !evaluate && let Some(r) = p.passes.last_mut() {
+            evaluate_pass(r, &resolved, self.settings.reference.as_deref());
+        }
+        Ok(SeedOutput {
+            range: (self.range.0, self.range.1.min(first + p.done)),
+            done: p.done,
+            wall: p.wall,
+            device: p.device,
+            interrupted: p.interrupted,
+            sums: p.sums,
+            passes: p.passes,
+            resolved,
+        })
+    }
+
+    /// The next pass's sample count: half the samples so far (log-spaced points on the error
+    /// curve), under a time budget sized to the time left at the measured rate; None when the
+    /// time is up.
+    fn plan_pass(&self, p: &Progress, budget: u32) -> Option<u32> {
+        let mut pass = (p.done / 2).max(1).min(budget - p.done);
+        if let Some(t) = self.settings.time {
+            if p.wall >= t {
+                return None;
+            }
+            if p.done > 0 {
+                let rate = f64::from(p.done) / p.wall.max(1e-9);
+                pass = pass.min(((t - p.wall) * rate).max(1.0) as u32);
+            }
+        }
+        Some(pass)
+    }
+
+    /// Dispatches `pass` samples from sample `from`, moving each block off the device when it
+    /// completes; returns the samples done (fewer when cancelled).
+    fn render_pass(
+        &self,
+        p: &mut Progress,
+        seed: u64,
+        from: u32,
+        pass: u32,
+        budget: u32,
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<u32> {
+        let kernels = &self.setup.kernels;
+        let mut k = 0;
+        while k < pass {
+            let s = from + k;
+            let (block_start, block_end) = film::block_of(s, self.settings.spp);
+            let n = self.per_dispatch.min(pass - k).min(block_end - s);
+            // The integrator's own state (a cache generation) may end a dispatch early.
+            let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
+            for pc in tiles(self.window, s, n, seed) {
+                self.ctx.one_shot(|cmd| {
+                    crate::vk::GpuTimer::around(self.timer, cmd, || kernels.record(cmd, &pc))
+                })?;
+                if let Some(t) = self.timer {
+                    p.device += t.seconds()?;
+                }
+            }
+            k += n;
+            if s + n == block_end {
+                self.commit_block(p, block_start, block_end)?;
+            }
+            progress(p.done + k, budget);
+            if self.cancelled() {
+                // Every pixel has done + k samples: stop here, keeping them.
+                p.interrupted = true;
+                break;
+            }
+        }
+        Ok(k)
+    }
+
+    /// A complete block leaves the device: exact sums if the job owns all of it, else kept whole
+    /// as a boundary block.
+    fn commit_block(&self, p: &mut Progress, start: u32, end: u32) -> Result<()> {
+        let block = film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
+        if start >= self.range.0 && end <= self.range.1 {
+            p.sums.add_block(&block);
+        } else {
+            p.sums.boundary.push(film::BoundaryBlock {
+                start,
+                end,
+                sums: block,
+            });
+        }
+        film::clear(self.ctx, self.film.device())
+    }
+
+    /// The pass's row of the error-against-time report, evaluated when asked.
+    fn report_pass(
+        &self,
+        p: &mut Progress,
+        planes: &[String],
+        evaluate: bool,
+        first: u32,
+        last: u32,
+    ) -> Result<()> {
+        let mut report = super::PassReport {
+            pass: p.passes.len() as u32,
+            spp: p.done,
+            device_seconds: p.device,
+            wall_seconds: p.wall,
+            ..Default::default()
+        };
+        if !evaluate {
+            p.passes.clear();
+            p.passes.push(report);
+            return Ok(());
+        }
+        // Reads the unfinished block without moving it: the block grid stays fixed.
+        let mut peek = p.sums.all_sums();
+        if (first + p.done) % film::FILM_BLOCK != 0 && first + p.done != last {
+            let block =
+                film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
+            film::add_block(peek.to_mut(), &block, p.sums.channels());
+        }
+        let r = film::resolve(
+            &peek,
+            planes,
+            self.window.width(),
+            self.window.height(),
+            p.done,
+        );
+        evaluate_pass(&mut report, &r, self.settings.reference.as_deref());
+        p.passes.push(report);
+        p.last_resolved = Some(r);
+        Ok(())
+    }
+}
+
+/// One seed's render.
+pub struct SeedOutput {
+    /// The samples it holds of the job's range.
+    pub range: (u32, u32),
+    pub done: u32,
+    pub wall: f64,
+    pub device: f64,
+    pub interrupted: bool,
+    pub sums: film::FilmSums,
+    pub passes: Vec<super::PassReport>,
+    pub resolved: film::Resolved,
+}
+
+pub fn evaluate_pass(
+    report: &mut super::PassReport,
+    r: &film::Resolved,
+    reference: Option<&[[f32; 3]]>,
+) {
+    use crate::metrics;
+    report.non_finite_samples = r.non_finite_samples;
+    report.estimated_relmse = metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, r.spp);
+    report.error = reference.map(|reference| metrics::compare(&r.film.beauty, reference));
+}
