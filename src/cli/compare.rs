@@ -100,10 +100,13 @@ struct Run {
 }
 
 /// A name `--integrators` takes besides the integrators' own: (name, integrator, parameters).
-type Alias = (&'static str, &'static str, &'static [(&'static str, &'static str)]);
+type Alias = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+);
 
-const ALIASES: &[Alias] =
-    &[("full-nocache", "full", &[("radiosity_cache", "off")])];
+const ALIASES: &[Alias] = &[("full-nocache", "full", &[("radiosity_cache", "off")])];
 
 fn alias_names() -> String {
     let n: Vec<&str> = ALIASES.iter().map(|a| a.0).collect();
@@ -154,11 +157,7 @@ fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
                 }
             }
             for (k, v) in extra {
-                p.set(
-                    k,
-                    *v,
-                    format!("--integrators {}", integrator.unwrap_or("")),
-                );
+                p.set(k, *v, format!("--integrators {}", integrator.unwrap_or("")));
             }
             let it = crate::integrators::create(&kind, &p).map_err(|e| {
                 anyhow::anyhow!(

@@ -114,7 +114,10 @@ impl SceneArgs {
             Some(p) => crate::scene::load(p)?,
             None => crate::scene::default_scene(),
         };
-        scene.camera.set_resolution(self.width, self.height)?;
+        scene
+            .camera
+            .set_resolution(self.width, self.height)
+            .map_err(anyhow::Error::msg)?;
         Ok(scene)
     }
 

@@ -81,7 +81,7 @@ pub struct RenderStats {
 }
 
 pub struct RenderOutput {
-    pub film: crate::output::Film,
+    pub film: crate::film::Film,
     pub stats: RenderStats,
     /// One entry per pass when passes were evaluated; else only the last.
     pub passes: Vec<PassReport>,

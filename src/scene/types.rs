@@ -58,11 +58,9 @@ impl Camera {
         &mut self,
         width: Option<u32>,
         height: Option<u32>,
-    ) -> Result<(), crate::Error> {
+    ) -> Result<(), String> {
         if width == Some(0) || height == Some(0) {
-            return Err(crate::Error::Invalid(
-                "--width and --height must be at least 1".into(),
-            ));
+            return Err("--width and --height must be at least 1".into());
         }
         let (w0, h0) = (f64::from(self.width), f64::from(self.height));
         let follow = |size: u32, ratio: f64| ((f64::from(size) * ratio).round() as u32).max(1);
