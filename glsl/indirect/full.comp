@@ -15,7 +15,7 @@
 // nothing: direct lighting has them. Paths light -> specular -> diffuse -> eye (caustics) are left
 // out, as in the course.
 //
-// Update pass (FULL_PASS_UPDATE, src/render/indirect/radiosity.rs): one path per block x block
+// Update pass (FULL_PASS_UPDATE, src/integrators/indirect/radiosity.rs): one path per block x block
 // pixels (gl_GlobalInvocationID.xy) and update index (pc.update.index + gl_GlobalInvocationID.z): a
 // camera ray through a random point of the block, a first bounce chosen as the film pass's camera
 // hit chooses (diffuse or specular lobe), then up to pc.update.vertices diffuse vertices. At each

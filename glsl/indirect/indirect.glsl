@@ -1,7 +1,7 @@
 // Indirect lighting (docs/techniques.md, "Indirect lighting: the three integrators",
 // "Lobe selection and ray cones", "The radiosity cache"): lobe sampling for path continuation, ray
 // cones, the radiosity cache's lookups, and the outgoing diffuse radiance of a surface with or
-// without the cache. Used by glsl/indirect/{path,full}.comp (src/render/indirect/).
+// without the cache. Used by glsl/indirect/{path,full}.comp (src/integrators/indirect/).
 //
 // Conventions:
 // * Emission is only ever added where a camera ray meets it: every other emitter contribution is

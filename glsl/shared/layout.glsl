@@ -133,7 +133,7 @@
 // (biased, consistent) or its leave-one-out form (unbiased).
 #define CONTROL_VARIATES_AVGVIS 1
 #define CONTROL_VARIATES_LOO 2
-// Radiosity cache (src/render/indirect/radiosity.rs): a world-space hashed grid. Lookups probe at
+// Radiosity cache (src/integrators/indirect/radiosity.rs): a world-space hashed grid. Lookups probe at
 // most RADIOSITY_PROBES consecutive entries; each update record names its cell at
 // RADIOSITY_RECORD_KEYS levels (the footprint's, then the next coarser one).
 #define RADIOSITY_PROBES 16
