@@ -197,28 +197,44 @@ fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
     Ok(runs)
 }
 
+/// The files a comparison writes: one EXR per run, the error plot and the image strip.
+struct Outputs {
+    exrs: Vec<PathBuf>,
+    plot: PathBuf,
+    strip: PathBuf,
+}
+
+impl Outputs {
+    /// The files of `runs`, checked before any work.
+    fn new(a: &CompareArgs, runs: &[Run]) -> Result<Outputs> {
+        let with_suffix = |s: &str| PathBuf::from(format!("{}-{s}", a.output.display()));
+        let o = Outputs {
+            exrs: runs
+                .iter()
+                .map(|r| with_suffix(&format!("{}.exr", r.name)))
+                .collect(),
+            plot: with_suffix("error.png"),
+            strip: with_suffix("strip.png"),
+        };
+        let outputs: Vec<(&str, &std::path::Path)> = o
+            .exrs
+            .iter()
+            .map(|p| ("image", p.as_path()))
+            .chain([("plot", o.plot.as_path()), ("strip", o.strip.as_path())])
+            .collect();
+        let inputs = super::named([
+            ("scene", a.scene.scene.as_deref()),
+            ("reference", a.reference.as_deref()),
+        ]);
+        check_outputs(&outputs, &inputs)?;
+        Ok(o)
+    }
+}
+
 pub fn run(a: &CompareArgs) -> Result<()> {
     let scene = a.scene.load()?;
     let runs = runs(a, &scene)?;
-    let with_suffix = |s: &str| PathBuf::from(format!("{}-{s}", a.output.display()));
-    let (plot_path, strip_path) = (with_suffix("error.png"), with_suffix("strip.png"));
-    let exrs: Vec<PathBuf> = runs
-        .iter()
-        .map(|r| with_suffix(&format!("{}.exr", r.name)))
-        .collect();
-    let outputs: Vec<(&str, &std::path::Path)> = exrs
-        .iter()
-        .map(|p| ("image", p.as_path()))
-        .chain([
-            ("plot", plot_path.as_path()),
-            ("strip", strip_path.as_path()),
-        ])
-        .collect();
-    let inputs = super::named([
-        ("scene", a.scene.scene.as_deref()),
-        ("reference", a.reference.as_deref()),
-    ]);
-    check_outputs(&outputs, &inputs)?;
+    let files = Outputs::new(a, &runs)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a
         .reference
@@ -232,7 +248,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     })?;
     let renderer = Renderer::new(ctx.clone());
     let mut rows: Vec<(String, RenderOutput)> = Vec::new();
-    for (run, exr) in runs.iter().zip(&exrs) {
+    for (run, exr) in runs.iter().zip(&files.exrs) {
         let settings = RenderSettings {
             integrator: run.integrator.clone(),
             spp: 1 << 20,
@@ -244,24 +260,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             cancel: Some(cancel.clone()),
             ..Default::default()
         };
-        if !a.quiet {
-            eprintln!("illum compare: {} for {} s ...", run.name, a.time);
-        }
-        let bar = progress_bar(a.quiet, settings.spp, Some(a.time));
-        let setup_done = announce_compiles(&ctx, &bar, a.quiet);
-        let started = std::time::Instant::now();
-        let out = renderer.render(&scene, &settings, &mut |_, _| {
-            if !setup_done.swap(true, Ordering::SeqCst) {
-                bar.set_message("");
-            }
-            bar.set_position(
-                ((started.elapsed().as_secs_f64() / a.time) * 1000.0).min(1000.0) as u64,
-            );
-        });
-        setup_done.store(true, Ordering::SeqCst);
-        ctx.set_kernel_listener(None);
-        bar.finish_and_clear();
-        let out = out?;
+        let out = render_run(a, &renderer, &scene, &settings, &run.name)?;
         write_exr(
             exr,
             &out.film,
@@ -283,13 +282,71 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         rows.push((run.name.clone(), out));
     }
     let measured = reference.is_some();
-    let error_of = |p: &PassReport| {
+    let series = print_table(a, &rows, measured);
+    crate::report::plot_error(
+        &files.plot,
+        &format!("{:.1} s each", a.time),
         if measured {
-            p.error.map(|e| e.relmse)
+            "relMSE"
         } else {
-            p.estimated_relmse
+            "estimated relMSE (half-buffers)"
+        },
+        &series,
+    )?;
+    write_strip(&files.strip, &rows, reference.as_deref())?;
+    if !a.quiet {
+        eprintln!(
+            "illum compare: wrote {}, {} and {}-<name>.exr",
+            files.plot.display(),
+            files.strip.display(),
+            a.output.display()
+        );
+    }
+    super::check_validation(&ctx)
+}
+
+/// One run's render, with its progress bar.
+fn render_run(
+    a: &CompareArgs,
+    renderer: &Renderer,
+    scene: &crate::scene::Scene,
+    settings: &RenderSettings,
+    name: &str,
+) -> Result<RenderOutput> {
+    if !a.quiet {
+        eprintln!("illum compare: {name} for {} s ...", a.time);
+    }
+    let ctx = renderer.context();
+    let bar = progress_bar(a.quiet, settings.spp, Some(a.time));
+    let setup_done = announce_compiles(ctx, &bar, a.quiet);
+    let started = std::time::Instant::now();
+    let out = renderer.render(scene, settings, &mut |_, _| {
+        if !setup_done.swap(true, Ordering::SeqCst) {
+            bar.set_message("");
         }
-    };
+        bar.set_position(((started.elapsed().as_secs_f64() / a.time) * 1000.0).min(1000.0) as u64);
+    });
+    setup_done.store(true, Ordering::SeqCst);
+    ctx.set_kernel_listener(None);
+    bar.finish_and_clear();
+    Ok(out?)
+}
+
+/// A pass's relMSE: against the reference when there is one, else the half-buffer estimate.
+fn error_of(p: &PassReport, measured: bool) -> Option<f64> {
+    if measured {
+        p.error.map(|e| e.relmse)
+    } else {
+        p.estimated_relmse
+    }
+}
+
+/// Prints the table of runs and returns their error-against-time curves.
+fn print_table(
+    a: &CompareArgs,
+    rows: &[(String, RenderOutput)],
+    measured: bool,
+) -> Vec<crate::report::Series> {
     println!(
         "{:<14} {:>8} {:>10} {:>14} {:>14}",
         match (a.integrators.is_empty(), a.samples.is_empty()) {
@@ -303,9 +360,9 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         "efficiency"
     );
     let mut series = Vec::new();
-    for (t, out) in &rows {
+    for (t, out) in rows {
         let last = out.passes.last().cloned().unwrap_or_default();
-        let err = error_of(&last).unwrap_or(f64::NAN);
+        let err = error_of(&last, measured).unwrap_or(f64::NAN);
         println!(
             "{:<14} {:>8} {:>10.3} {:>14.4e} {:>14.4e}",
             t,
@@ -319,7 +376,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             points: out
                 .passes
                 .iter()
-                .filter_map(|p| Some((p.wall_seconds, error_of(p)?)))
+                .filter_map(|p| Some((p.wall_seconds, error_of(p, measured)?)))
                 .collect(),
         });
     }
@@ -328,19 +385,19 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             "(no --reference: relMSE estimated from the even/odd half-buffers; the estimate cannot see bias)"
         );
     }
-    crate::report::plot_error(
-        &plot_path,
-        &format!("{:.1} s each", a.time),
-        if measured {
-            "relMSE"
-        } else {
-            "estimated relMSE (half-buffers)"
-        },
-        &series,
-    )?;
+    series
+}
+
+/// The strip of the runs' images, each with its error map.
+fn write_strip(
+    path: &std::path::Path,
+    rows: &[(String, RenderOutput)],
+    reference: Option<&[[f32; 3]]>,
+) -> Result<()> {
+    let measured = reference.is_some();
     let maps: Vec<Vec<f64>> = rows
         .iter()
-        .map(|(_, out)| match &reference {
+        .map(|(_, out)| match reference {
             Some(r) => crate::report::relative_error_map(&out.film.beauty, r),
             None => variance_map(out),
         })
@@ -353,22 +410,17 @@ pub fn run(a: &CompareArgs) -> Result<()> {
                 "{} {}spp {:.1e}",
                 t,
                 out.stats.spp,
-                out.passes.last().and_then(error_of).unwrap_or(f64::NAN)
+                out.passes
+                    .last()
+                    .and_then(|p| error_of(p, measured))
+                    .unwrap_or(f64::NAN)
             ),
             film: &out.film,
             error,
         })
         .collect();
-    crate::report::image_strip(&strip_path, &panels)?;
-    if !a.quiet {
-        eprintln!(
-            "illum compare: wrote {}, {} and {}-<name>.exr",
-            plot_path.display(),
-            strip_path.display(),
-            a.output.display()
-        );
-    }
-    super::check_validation(&ctx)
+    crate::report::image_strip(path, &panels)?;
+    Ok(())
 }
 
 /// Per-pixel variance of the mean over the squared pixel value: the half-buffer view of the
