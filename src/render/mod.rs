@@ -80,6 +80,29 @@ pub struct RenderStats {
     pub interrupted: bool,
 }
 
+impl RenderStats {
+    /// The figures of one seed's render (set-up and total times are the caller's).
+    fn of(prepared: &PreparedScene, setup: &driver::Setup, o: &driver::SeedOutput) -> RenderStats {
+        let r = &o.resolved;
+        RenderStats {
+            upload_seconds: prepared.upload_seconds,
+            build: prepared.build.clone(),
+            render_seconds: o.wall,
+            device_seconds: o.device,
+            spp: o.done,
+            non_finite_samples: r.non_finite_samples,
+            rays: r.rays,
+            trace: prepared.trace.name(),
+            integrator: setup.kernels.report(),
+            dark_lights: prepared.gpu.dark_lights.clone(),
+            emitters: prepared.gpu.emitters,
+            clamped_samples: r.clamped_samples,
+            interrupted: o.interrupted,
+            ..Default::default()
+        }
+    }
+}
+
 pub struct RenderOutput {
     pub film: crate::film::Film,
     pub stats: RenderStats,
@@ -236,26 +259,11 @@ impl Renderer {
                 film::clear(ctx, film_buffers.device())?;
             }
             let o = run.render_seed(seed, progress)?;
-            let r = &o.resolved;
-            let stats = RenderStats {
-                upload_seconds: prepared.upload_seconds,
-                warmup_seconds,
-                // Later seeds reuse the set-up: only the film is cleared.
-                setup_seconds: if index == 0 { setup_seconds } else { 0.0 },
-                build: prepared.build.clone(),
-                render_seconds: o.wall,
-                device_seconds: o.device,
-                total_seconds: t0.elapsed().as_secs_f64(),
-                spp: o.done,
-                non_finite_samples: r.non_finite_samples,
-                rays: r.rays,
-                trace: prepared.trace.name(),
-                integrator: setup.kernels.report(),
-                dark_lights: prepared.gpu.dark_lights.clone(),
-                emitters: prepared.gpu.emitters,
-                clamped_samples: r.clamped_samples,
-                interrupted: o.interrupted,
-            };
+            let mut stats = RenderStats::of(prepared, &setup, &o);
+            stats.warmup_seconds = warmup_seconds;
+            // Later seeds reuse the set-up: only the film is cleared.
+            stats.setup_seconds = if index == 0 { setup_seconds } else { 0.0 };
+            stats.total_seconds = t0.elapsed().as_secs_f64();
             outputs.push(RenderOutput {
                 stats,
                 film: o.resolved.film,
