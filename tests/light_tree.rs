@@ -4,12 +4,12 @@
 //! rounding, the PMFs sum to one less the no-light share, and the frequencies of 2^20 draws at
 //! fixed points pass a chi-square test against the host PMF (a draw of a PMF-0 light fails).
 
-mod sampling_support;
+mod common;
 
+use common::*;
 use glam::{DVec3, Vec3};
 use illum::gpu_scene::light_tree::{self, LightTree};
 use illum::layout::*;
-use sampling_support::*;
 use std::f64::consts::PI;
 
 #[repr(C)]
@@ -41,10 +41,6 @@ impl Lcg {
             self.next() * 24.0 - 12.0,
         )
     }
-}
-
-fn f4(v: DVec3, w: f64) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, w as f32]
 }
 
 /// Spheres, rects, disks and triangles (some two-sided) of varied power in a 20 × 4 × 20 box.

@@ -6,14 +6,14 @@
 
 #[path = "sampling/camera_streams.rs"]
 mod camera_streams;
+mod common;
 #[path = "sampling/dome.rs"]
 mod dome_sampling;
-mod sampling_support;
 
+use common::*;
 use glam::DVec3;
 use illum::layout::*;
 use illum::stress::closed_form::{polygon_irradiance, sphere_irradiance};
-use sampling_support::*;
 use std::f64::consts::PI;
 
 const N: usize = 1 << 20;
@@ -24,13 +24,6 @@ struct LightParams {
     dome: GpuDomeSampling,
     light: GpuLight,
     p: [f32; 4],
-}
-
-fn f4(v: DVec3, w: f64) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, w as f32]
-}
-fn d3<const N: usize>(v: [f32; N]) -> DVec3 {
-    DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
 }
 
 fn light(kind: u32, p0: [f32; 4], p1: [f32; 4], p2: [f32; 4], two_sided: bool) -> GpuLight {
