@@ -10,24 +10,11 @@
 
 mod common;
 use base64::Engine;
+use common::Rng;
 use illum::render::{FilmSums, Window};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 use std::time::{Duration, Instant};
-
-/// xorshift64*: deterministic mutations.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 /// One to four mutations of `seed`: bit flips, bytes set to values parsers care about, numbers
 /// spliced in, ranges deleted, duplicated or truncated.
@@ -111,7 +98,7 @@ fn fuzz(name: &str, seeds: &[Vec<u8>], load: &dyn Fn(&[u8]) -> bool) -> (usize, 
         })
         .unwrap_or_default();
     regressions.extend(seeds.iter().cloned());
-    let mut rng = Rng(fuzz_seed().wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
+    let mut rng = Rng::new(fuzz_seed());
     let (start, budget) = (Instant::now(), budget());
     let (mut tried, mut loaded) = (0, 0);
     // `what` names the input only when it fails: no string is built per input.

@@ -707,7 +707,7 @@ fn pdf_integrates_to_one_and_is_zero_off_the_light() {
     let g = Lights::new();
     let o = DVec3::ZERO;
     let n = 1 << 20;
-    let mut rng = HostRng(77);
+    let mut rng = Rng::new(77);
     let dirs: Vec<[f32; 4]> = (0..n).map(|_| f4(rng.sphere(), 0.0)).collect();
     // Each case's sampler: how much of it is area or solid-angle sampling (pdf integrates to 1)
     // and how much uniform sampling of the hemisphere facing a planar emitter (integrates to the
@@ -877,26 +877,6 @@ fn meets(l: &GpuLight, p: DVec3, d: DVec3) -> Option<bool> {
     }
 }
 
-/// splitmix64, for host-side Monte Carlo.
-struct HostRng(u64);
-
-impl HostRng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn sphere(&mut self) -> DVec3 {
-        let z = 1.0 - 2.0 * self.next();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = 2.0 * PI * self.next();
-        DVec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Irradiance
 
@@ -975,18 +955,12 @@ fn irradiance_ref(l: &GpuLight, p: DVec3, n: DVec3) -> f64 {
 
 /// Monte Carlo E/L with cosine-weighted directions about n: pi P(the direction meets the light's
 /// emitting side). Returns the estimate and its standard error.
-fn irradiance_mc(
-    l: &GpuLight,
-    p: DVec3,
-    n: DVec3,
-    samples: usize,
-    rng: &mut HostRng,
-) -> (f64, f64) {
+fn irradiance_mc(l: &GpuLight, p: DVec3, n: DVec3, samples: usize, rng: &mut Rng) -> (f64, f64) {
     let (t, b) = basis(n);
     let mut hits = 0usize;
     let mut ambiguous = 0usize;
     for _ in 0..samples {
-        let (u1, u2) = (rng.next(), rng.next());
+        let (u1, u2) = (rng.uniform(), rng.uniform());
         let r = u1.sqrt();
         let phi = 2.0 * PI * u2;
         let d = r * phi.cos() * t + r * phi.sin() * b + (1.0 - u1).max(0.0).sqrt() * n;
@@ -1259,7 +1233,7 @@ fn irradiance_matches_references() {
         })
         .collect();
     let out: Vec<[f32; 4]> = k.run(&[0u32; 4], &input, 0, input.len(), 0, input.len());
-    let mut rng = HostRng(2024);
+    let mut rng = Rng::new(2024);
     for ((name, l, p, n, listed), got) in cases.iter().zip(&out) {
         // The reference from the float32 light and the float32 normal the GPU saw.
         let n32 = d3(f4(*n, 0.0));

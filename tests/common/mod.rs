@@ -1,7 +1,8 @@
 //! The integration tests' support library, one file a topic: the validated Vulkan context and the
 //! test kernels (gpu.rs), inline scenes (scenes.rs), renders (render.rs) and independent batches
 //! of them (batches.rs), statistics (stats.rs), chi-square tests of direction samplers over
-//! domains of directions (chi2.rs, domain.rs) and the illum binary (cli.rs).
+//! domains of directions (chi2.rs, domain.rs), random numbers (rng.rs) and the illum binary
+//! (cli.rs).
 //! `ILLUM_TEST_TRACE=auto|rayquery|bvh` picks the trace path (CI runs the suite on each),
 //! `ILLUM_TEST_DEVICE` the device.
 #![allow(dead_code)]
@@ -12,10 +13,11 @@ mod cli;
 mod domain;
 mod gpu;
 mod render;
+mod rng;
 mod scenes;
 mod stats;
 
 // Each test binary uses a part of the library; the re-exports of the parts it does not use
 // would warn.
 #[allow(unused_imports)]
-pub use {batches::*, chi2::*, cli::*, domain::*, gpu::*, render::*, scenes::*, stats::*};
+pub use {batches::*, chi2::*, cli::*, domain::*, gpu::*, render::*, rng::*, scenes::*, stats::*};
