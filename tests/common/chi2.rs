@@ -1,5 +1,5 @@
 //! Chi-square goodness of fit of a direction sampler against its own pdf() (the pbrt-v4 /
-//! Mitsuba 3 way), and the significance of the sampler tests (sampling.rs, brdf.rs).
+//! Mitsuba 3 way), and the significance of the sampler tests (sampling_*.rs, brdf.rs).
 //!
 //! * The sphere (or the sampler's support) is parametrised by a 2D domain (x, y) ∈ [0,1]² with a
 //!   known Jacobian dω/(dx dy): a polar grid about an axis, a cone, a light's surface, or the dome's
@@ -19,8 +19,9 @@
 use super::{Domain, chi2_sf, normal_two_sided_p};
 use glam::DVec3;
 
-/// Upper bound on the number of hypothesis tests (chi-square and z-tests) in tests/sampling.rs and
-/// tests/brdf.rs together (about 290 today); Šidák's correction with an upper bound is conservative.
+/// Upper bound on the number of hypothesis tests (chi-square and z-tests) in tests/sampling_*.rs
+/// and tests/brdf.rs together (about 290 today); Šidák's correction with an upper bound is
+/// conservative.
 pub const HYPOTHESES: f64 = 400.0;
 /// Family-wise significance level of the suite.
 pub const SIGNIFICANCE: f64 = 0.01;

@@ -1,8 +1,8 @@
 //! The integration tests' support library, one file a topic: the validated Vulkan context and the
 //! test kernels (gpu.rs), inline scenes (scenes.rs), renders (render.rs) and independent batches
 //! of them (batches.rs), statistics (stats.rs), chi-square tests of direction samplers over
-//! domains of directions (chi2.rs, domain.rs), random numbers (rng.rs) and the illum binary
-//! (cli.rs).
+//! domains of directions (chi2.rs, domain.rs), the light test kernels (lights.rs, used as
+//! `common::lights`), random numbers (rng.rs) and the illum binary (cli.rs).
 //! `ILLUM_TEST_TRACE=auto|rayquery|bvh` picks the trace path (CI runs the suite on each),
 //! `ILLUM_TEST_DEVICE` the device.
 #![allow(dead_code)]
@@ -12,6 +12,7 @@ mod chi2;
 mod cli;
 mod domain;
 mod gpu;
+pub mod lights;
 mod render;
 mod rng;
 mod scenes;
