@@ -87,3 +87,23 @@ pub fn block_stats(outs: &[RenderOutput], block: u32) -> Vec<(f64, f64)> {
         })
         .collect()
 }
+
+/// The channels of a film's EXR: beauty, then the AOV planes.
+pub const EXR_CHANNELS: [&str; 16] = [
+    "R",
+    "G",
+    "B",
+    "Albedo.R",
+    "Albedo.G",
+    "Albedo.B",
+    "N.X",
+    "N.Y",
+    "N.Z",
+    "Z",
+    "Emission.R",
+    "Emission.G",
+    "Emission.B",
+    "Variance.R",
+    "Variance.G",
+    "Variance.B",
+];
