@@ -3,11 +3,11 @@
 //! quadrature references (and the tables of docs/techniques.md, "Reference values"), Fresnel, the
 //! delta lobe and invalid input.
 
-mod sampling_support;
+mod common;
 
+use common::*;
 use glam::DVec3;
 use illum::layout::*;
-use sampling_support::*;
 use std::f64::consts::PI;
 
 const N: usize = 1 << 20;
@@ -20,13 +20,6 @@ struct BrdfParams {
     t: [f32; 4],
     b: [f32; 4],
     v: [f32; 4],
-}
-
-fn f4(v: DVec3) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, 0.0]
-}
-fn d3(v: [f32; 4]) -> DVec3 {
-    DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
 }
 
 fn lobe(distribution: u32, a: (f64, f64), fresnel: u32, f0: [f32; 3]) -> GpuLobe {
@@ -65,10 +58,10 @@ impl Setup {
     fn params(&self, lobe: GpuLobe) -> BrdfParams {
         BrdfParams {
             lobe,
-            n: f4(self.n),
-            t: f4(self.t),
-            b: f4(self.b),
-            v: f4(self.v),
+            n: f4(self.n, 0.0),
+            t: f4(self.t, 0.0),
+            b: f4(self.b, 0.0),
+            v: f4(self.v, 0.0),
         }
     }
     /// The view direction in the local frame (x along t, y along b, z along n).
@@ -147,7 +140,7 @@ fn chi2_case(k: &Kernel, name: &str, lobe: GpuLobe, theta_deg: f64, seed: u32) {
             let theta = 0.5 * PI * (i as f64 + 0.5) / m_theta as f64;
             let phi = 2.0 * PI * (j as f64 + 0.5) / m_phi as f64;
             let d = theta.sin() * (phi.cos() * t + phi.sin() * b) + theta.cos() * s.n;
-            dirs.push(f4(d));
+            dirs.push(f4(d, 0.0));
         }
     }
     let p = eval_pdfs(k, &prm, &dirs);
@@ -410,16 +403,23 @@ fn delta_lobe_and_invalid_views() {
         DIST_GGX_SMITH_SEPARABLE,
     ] {
         let mut below = s.params(white(dist, (0.3, 0.3)));
-        below.v = f4(-s.v);
+        below.v = f4(-s.v, 0.0);
         let out = Samples(k.run(&below, &[[0f32; 4]], 0, 1024, 7, 3 * 1024));
         for i in 0..1024 {
             assert!(!out.valid(i) && out.weight(i) == DVec3::ZERO && out.pdf(i) == 0.0);
         }
-        let dirs = [f4(s.n), f4(s.v), f4(-s.n)];
+        let dirs = [f4(s.n, 0.0), f4(s.v, 0.0), f4(-s.n, 0.0)];
         let e: Vec<[f32; 4]> = k.run(&below, &dirs, 1, 3, 0, 3);
         assert!(e.iter().all(|x| *x == [0.0; 4]), "{e:?}");
         // l below the horizon: 0 too.
-        let e: Vec<[f32; 4]> = k.run(&s.params(white(dist, (0.3, 0.3))), &[f4(-s.n)], 1, 1, 0, 1);
+        let e: Vec<[f32; 4]> = k.run(
+            &s.params(white(dist, (0.3, 0.3))),
+            &[f4(-s.n, 0.0)],
+            1,
+            1,
+            0,
+            1,
+        );
         assert_eq!(e[0], [0.0; 4]);
     }
     assert_no_validation_messages(&ctx);

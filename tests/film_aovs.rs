@@ -27,14 +27,11 @@ fn planes(names: &[&str]) -> Vec<String> {
 /// pixel: arbitrary but fixed values of all magnitudes (so float64 rounding would show), counts
 /// where FilmPixel has counts.
 fn block_sums(start: u32, channels: usize) -> Vec<f32> {
-    let mut state = 0x9e37_79b9_7f4a_7c15u64 ^ u64::from(start);
+    let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15 ^ u64::from(start));
     let pixels = (W * H) as usize;
     (0..pixels * channels)
         .map(|i| {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            let u = (state >> 40) as f32 / (1u64 << 24) as f32;
+            let u = rng.uniform_f32();
             match i % channels {
                 // clamped, rays, hits, non_finite: counts; odd.unused: 0.
                 3 | 7 | 11 | 19 => (u * 256.0).floor(),

@@ -4,12 +4,12 @@
 //! rounding, the PMFs sum to one less the no-light share, and the frequencies of 2^20 draws at
 //! fixed points pass a chi-square test against the host PMF (a draw of a PMF-0 light fails).
 
-mod sampling_support;
+mod common;
 
+use common::*;
 use glam::{DVec3, Vec3};
 use illum::gpu_scene::light_tree::{self, LightTree};
 use illum::layout::*;
-use sampling_support::*;
 use std::f64::consts::PI;
 
 #[repr(C)]
@@ -19,51 +19,32 @@ struct TreeParams {
     trails: u64,
 }
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn dir(&mut self) -> DVec3 {
-        let z = 2.0 * self.next() - 1.0;
-        let phi = 2.0 * PI * self.next();
-        let s = (1.0 - z * z).sqrt();
-        DVec3::new(s * phi.cos(), s * phi.sin(), z)
-    }
-    fn point(&mut self) -> DVec3 {
-        DVec3::new(
-            self.next() * 24.0 - 12.0,
-            self.next() * 6.0 - 1.0,
-            self.next() * 24.0 - 12.0,
-        )
-    }
-}
-
-fn f4(v: DVec3, w: f64) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, w as f32]
+/// A point of the box around the lights, and a little beyond it.
+fn point(g: &mut Rng) -> DVec3 {
+    DVec3::new(
+        g.uniform() * 24.0 - 12.0,
+        g.uniform() * 6.0 - 1.0,
+        g.uniform() * 24.0 - 12.0,
+    )
 }
 
 /// Spheres, rects, disks and triangles (some two-sided) of varied power in a 20 × 4 × 20 box.
 fn lights(n: usize, seed: u64) -> Vec<GpuLight> {
-    let mut g = Lcg(seed);
+    let mut g = Rng::new(seed);
     (0..n)
         .map(|i| {
             let c = DVec3::new(
-                g.next() * 20.0 - 10.0,
-                g.next() * 4.0,
-                g.next() * 20.0 - 10.0,
+                g.uniform() * 20.0 - 10.0,
+                g.uniform() * 4.0,
+                g.uniform() * 20.0 - 10.0,
             );
-            let r = 0.05 + 0.3 * g.next();
-            let d = g.dir();
+            let r = 0.05 + 0.3 * g.uniform();
+            let d = g.sphere();
             let t = d.any_orthonormal_vector();
             let kind = [LIGHT_SPHERE, LIGHT_RECT, LIGHT_DISK, LIGHT_TRIANGLE][i % 4];
             let mut l = GpuLight {
                 kind,
-                radiance: [(0.1 + 4.0 * g.next()) as f32, 1.0, 0.5],
+                radiance: [(0.1 + 4.0 * g.uniform()) as f32, 1.0, 0.5],
                 texture: NONE,
                 shape: NONE,
                 flags: if i % 5 == 0 { LIGHT_FLAG_TWO_SIDED } else { 0 },
@@ -136,8 +117,8 @@ fn point_inputs(pts: &[(DVec3, DVec3)]) -> Vec<[f32; 4]> {
 #[test]
 fn sampled_pmf_is_the_replayed_pmf_and_the_host_pmf() {
     let s = setup(1000, 11);
-    let mut g = Lcg(3);
-    let pts: Vec<(DVec3, DVec3)> = (0..8192).map(|_| (g.point(), g.dir())).collect();
+    let mut g = Rng::new(3);
+    let pts: Vec<(DVec3, DVec3)> = (0..8192).map(|_| (point(&mut g), g.sphere())).collect();
     let out: Vec<[u32; 4]> =
         s.kernel
             .run(&s.params, &point_inputs(&pts), 0, pts.len(), 17, pts.len());

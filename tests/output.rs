@@ -1,5 +1,7 @@
 //! Round trips of src/output: EXR planes and attributes, beauty lookup, PNG encoding, errors.
 
+mod common;
+
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -98,24 +100,7 @@ fn exr_round_trip_with_variance() {
     assert_eq!(img.path, file.0);
     let mut names: Vec<&str> = img.channels.iter().map(|(n, _)| n.as_str()).collect();
     names.sort_unstable();
-    let mut expected = vec![
-        "R",
-        "G",
-        "B",
-        "Albedo.R",
-        "Albedo.G",
-        "Albedo.B",
-        "N.X",
-        "N.Y",
-        "N.Z",
-        "Z",
-        "Emission.R",
-        "Emission.G",
-        "Emission.B",
-        "Variance.R",
-        "Variance.G",
-        "Variance.B",
-    ];
+    let mut expected = common::EXR_CHANNELS.to_vec();
     expected.sort_unstable();
     assert_eq!(names, expected);
     assert!(

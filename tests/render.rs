@@ -287,24 +287,7 @@ fn exr_has_the_aov_layers_and_metadata() {
     let img = illum::output::read_exr(&path).unwrap();
     let mut names: Vec<&str> = img.channels.iter().map(|(n, _)| n.as_str()).collect();
     names.sort();
-    for want in [
-        "R",
-        "G",
-        "B",
-        "Albedo.R",
-        "Albedo.G",
-        "Albedo.B",
-        "N.X",
-        "N.Y",
-        "N.Z",
-        "Z",
-        "Emission.R",
-        "Emission.G",
-        "Emission.B",
-        "Variance.R",
-        "Variance.G",
-        "Variance.B",
-    ] {
+    for want in EXR_CHANNELS {
         assert!(names.contains(&want), "missing channel {want} in {names:?}");
     }
     assert_eq!(img.attribute("illum.spp"), Some("2"));

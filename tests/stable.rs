@@ -17,14 +17,11 @@
 //! below the error of the naive formula (given in the comments, and computed here in f32 where it
 //! is cheap, so that a regression to it would be caught).
 
-// sampling_support (as in tests/sampling.rs) has the same validated context() and
-// assert_no_validation_messages() as tests/common; loading both would load tests/common/stats.rs
-// twice (clippy::duplicate_mod).
-mod sampling_support;
+mod common;
 
+use common::{Kernel, assert_no_validation_messages, basis, context, d3, f4};
 use glam::{DVec3, Vec3};
 use illum::vk::Context;
-use sampling_support::{Kernel, assert_no_validation_messages, basis, context};
 use std::f64::consts::PI;
 
 /// One input record of stable_check.comp: five vec4 (a, b, c, d, e), the case in e.w.
@@ -44,15 +41,9 @@ fn run(ctx: &Context, records: &[Record]) -> Vec<Output> {
     k.run(&[0u32; 4], records, 0, records.len(), 0, records.len())
 }
 
-fn v4(v: DVec3, w: f64) -> [f32; 4] {
-    [v.x as f32, v.y as f32, v.z as f32, w as f32]
-}
-fn d3(v: [f32; 4]) -> DVec3 {
-    DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
-}
 /// `v` rounded to float32 (what the GPU gets), back in f64.
 fn r32(v: DVec3) -> DVec3 {
-    d3(v4(v, 0.0))
+    d3(f4(v, 0.0))
 }
 fn s32(x: f64) -> f64 {
     f64::from(x as f32)
@@ -63,7 +54,7 @@ fn ulp32(x: f64) -> f64 {
     f64::from(f32::from_bits(x.to_bits() + 1) - x)
 }
 fn record(a: [f32; 4], b: [f32; 4], c: [f32; 4], d: [f32; 4], e: DVec3, case: f64) -> Record {
-    [a, b, c, d, v4(e, case)]
+    [a, b, c, d, f4(e, case)]
 }
 fn rel(x: f64, truth: f64) -> f64 {
     ((x - truth) / truth).abs()
@@ -102,9 +93,9 @@ fn sphere_light_cone_is_stable() {
         let w = r32((c - p).normalize());
         for &(ux, uy) in &us {
             recs.push(record(
-                v4(c, r),
-                v4(p, ux),
-                v4(w, uy),
+                f4(c, r),
+                f4(p, ux),
+                f4(w, uy),
                 [0.0; 4],
                 DVec3::ZERO,
                 CASE_SPHERE_LIGHT,
@@ -344,10 +335,10 @@ fn rect_solid_angle_is_stable() {
         .iter()
         .map(|(_, (p, s, ex, ey))| {
             record(
-                v4(*p, 0.0),
-                v4(*s, 0.0),
-                v4(*ex, 0.0),
-                v4(*ey, 0.0),
+                f4(*p, 0.0),
+                f4(*s, 0.0),
+                f4(*ex, 0.0),
+                f4(*ey, 0.0),
                 DVec3::ZERO,
                 CASE_RECT_OMEGA,
             )
@@ -489,9 +480,9 @@ fn ray_sphere_is_precise_far_away() {
         .iter()
         .map(|(_, c, r, o, d)| {
             record(
-                v4(*c, *r),
-                v4(*o, 0.0),
-                v4(*d, 0.0),
+                f4(*c, *r),
+                f4(*o, 0.0),
+                f4(*d, 0.0),
                 sphere_hc(*c, *r),
                 DVec3::ZERO,
                 CASE_RAY_SPHERE,
@@ -585,9 +576,9 @@ fn ray_sphere_is_precise_for_huge_spheres() {
         .iter()
         .map(|(_, c, r, hc, o, d, _)| {
             record(
-                v4(*c, *r),
-                v4(*o, 0.0),
-                v4(*d, 0.0),
+                f4(*c, *r),
+                f4(*o, 0.0),
+                f4(*d, 0.0),
                 *hc,
                 DVec3::ZERO,
                 CASE_RAY_SPHERE,

@@ -284,9 +284,46 @@ pub fn read_partial_info(path: &Path) -> Res<PartInfo> {
     parse_info(path, &header.own_attributes, header.layer_size)
 }
 
+/// Deflate expands data at most 1032 times: the most pixel bytes a compressed file can hold.
+const MAX_EXPANSION: u64 = 1032;
+
+/// Refuses a file whose header declares more pixel data than its size can hold, before the
+/// reader allocates it (a flipped size field asked for 240 GB).
+fn check_declared_size(path: &Path) -> Res<()> {
+    let meta = MetaData::read_from_file(path, false).map_err(|cause| OutputError::ExrRead {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let len = std::fs::metadata(path)
+        .map_err(|cause| OutputError::ExrRead {
+            path: path.to_path_buf(),
+            cause: exr::error::Error::from(cause),
+        })?
+        .len();
+    let mut declared: u64 = 0;
+    for h in &meta.headers {
+        let pixels = h.layer_size.0 as u64 * h.layer_size.1 as u64;
+        for c in &h.channels.list {
+            let bytes = pixels.saturating_mul(c.sample_type.bytes_per_sample() as u64);
+            declared = declared.saturating_add(bytes);
+        }
+    }
+    if declared > len.saturating_mul(MAX_EXPANSION) {
+        return Err(unsupported(
+            path,
+            format!(
+                "its header declares {declared} bytes of pixels, more than a {len}-byte file \
+                 can hold"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Reads a partial EXR written by [`write_partial`].
 pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
     let bad = |reason: String| unsupported(path, reason);
+    check_declared_size(path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

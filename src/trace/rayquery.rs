@@ -159,26 +159,69 @@ fn geometry(input: &BlasInput) -> (vk::AccelerationStructureGeometryKHR<'static>
     }
 }
 
+/// The bottom levels of `inputs` (built, then compacted) and the top level over `instances`.
 pub fn build(
     ctx: &Context,
     inputs: &[BlasInput],
     instances: &[TlasInstance],
 ) -> Result<RayQueryScene> {
-    let a = accel(ctx)?;
+    accel(ctx)?;
     let mut stats = BuildStats {
         blas_count: inputs.len(),
+        triangles: inputs
+            .iter()
+            .map(|i| match i {
+                BlasInput::Triangles(t) => u64::from(t.triangle_count),
+                BlasInput::Aabbs(_) => 0,
+            })
+            .sum(),
         ..Default::default()
     };
     let t0 = Instant::now();
-    // Bottom level: size, create, build all in one submission.
     let geoms: Vec<_> = inputs.iter().map(geometry).collect();
-    let mut blases = Vec::new();
-    let mut scratches = Vec::new();
-    let mut infos = Vec::new();
-    for (i, (g, count)) in geoms.iter().enumerate() {
-        if let BlasInput::Triangles(t) = &inputs[i] {
-            stats.triangles += u64::from(t.triangle_count);
-        }
+    let levels = create_bottom_levels(ctx, &geoms, &mut stats)?;
+    let (blases, compact_sizes) = build_bottom_levels(ctx, levels, &geoms)?;
+    stats.blas_seconds = t0.elapsed().as_secs_f64();
+
+    let t1 = Instant::now();
+    let compacted = compact(ctx, blases, &compact_sizes, &mut stats)?;
+    stats.compaction_seconds = t1.elapsed().as_secs_f64();
+
+    let t2 = Instant::now();
+    let (tlas, instance_buffer, tlas_bytes) = build_top(ctx, &compacted, instances, None)?
+        .ok_or_else(|| Error::Invalid("no top level was built".into()))?;
+    stats.tlas_bytes = tlas_bytes;
+    stats.tlas_seconds = t2.elapsed().as_secs_f64();
+    ctx.count_builds(compacted.len(), 1);
+    Ok(RayQueryScene {
+        _blases: compacted,
+        tlas,
+        _instances: instance_buffer,
+        instance_count: instances.len(),
+        stats,
+    })
+}
+
+/// Bottom levels created at their build size, each with its scratch and build info.
+struct BottomLevels<'g> {
+    blases: Vec<AccelerationStructure>,
+    scratches: Vec<Buffer>,
+    infos: Vec<vk::AccelerationStructureBuildGeometryInfoKHR<'g>>,
+}
+
+/// Sizes and creates a bottom level per geometry (primitive count beside it).
+fn create_bottom_levels<'g>(
+    ctx: &Context,
+    geoms: &'g [(vk::AccelerationStructureGeometryKHR<'static>, u32)],
+    stats: &mut BuildStats,
+) -> Result<BottomLevels<'g>> {
+    let a = accel(ctx)?;
+    let mut levels = BottomLevels {
+        blases: Vec::new(),
+        scratches: Vec::new(),
+        infos: Vec::new(),
+    };
+    for (g, count) in geoms {
         let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
             .flags(
@@ -206,14 +249,31 @@ pub fn build(
         stats.blas_bytes_uncompacted += sizes.acceleration_structure_size;
         stats.scratch_bytes += sizes.build_scratch_size;
         let (sb, saddr) = scratch(ctx, sizes.build_scratch_size)?;
-        scratches.push(sb);
-        infos.push(info.dst_acceleration_structure(blas.handle).scratch_data(
-            vk::DeviceOrHostAddressKHR {
-                device_address: saddr,
-            },
-        ));
-        blases.push(blas);
+        levels.scratches.push(sb);
+        levels
+            .infos
+            .push(info.dst_acceleration_structure(blas.handle).scratch_data(
+                vk::DeviceOrHostAddressKHR {
+                    device_address: saddr,
+                },
+            ));
+        levels.blases.push(blas);
     }
+    Ok(levels)
+}
+
+/// Builds every bottom level in one submission, which also queries their compacted sizes.
+fn build_bottom_levels(
+    ctx: &Context,
+    levels: BottomLevels,
+    geoms: &[(vk::AccelerationStructureGeometryKHR<'static>, u32)],
+) -> Result<(Vec<AccelerationStructure>, Vec<u64>)> {
+    let a = accel(ctx)?;
+    let BottomLevels {
+        blases,
+        scratches,
+        infos,
+    } = levels;
     let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> = geoms
         .iter()
         .map(|(_, c)| [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(*c)])
@@ -221,16 +281,7 @@ pub fn build(
     let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> =
         ranges.iter().map(|r| &r[..]).collect();
     let n = blases.len() as u32;
-    // SAFETY: valid device; the query pool is destroyed below.
-    let pool = unsafe {
-        ctx.device.create_query_pool(
-            &vk::QueryPoolCreateInfo::default()
-                .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
-                .query_count(n.max(1)),
-            None,
-        )
-    }
-    .vk("vkCreateQueryPool")?;
+    let pool = size_queries(ctx, n)?;
     let handles: Vec<_> = blases.iter().map(|b| b.handle).collect();
     let built = ctx.one_shot(|cmd| {
         // SAFETY: every referenced buffer and structure is alive until the wait in one_shot.
@@ -250,31 +301,59 @@ pub fn build(
         }
     });
     drop(scratches);
-    let mut compact_sizes = vec![0u64; n as usize];
-    let got = built.and_then(|_| {
-        if n == 0 {
-            return Ok(());
-        }
+    let sizes = built
+        .map_err(Error::from)
+        .and_then(|_| compacted_sizes(ctx, pool, n));
+    // SAFETY: the pool is no longer used.
+    unsafe { ctx.device.destroy_query_pool(pool, None) };
+    Ok((blases, sizes?))
+}
+
+/// A pool of `n` compacted-size queries (one at least: a pool may not be empty), to be destroyed
+/// by the caller.
+fn size_queries(ctx: &Context, n: u32) -> Result<vk::QueryPool> {
+    // SAFETY: valid device.
+    unsafe {
+        ctx.device.create_query_pool(
+            &vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
+                .query_count(n.max(1)),
+            None,
+        )
+    }
+    .vk("vkCreateQueryPool")
+    .map_err(Error::from)
+}
+
+/// The `n` compacted sizes that a completed submission wrote into `pool`.
+fn compacted_sizes(ctx: &Context, pool: vk::QueryPool, n: u32) -> Result<Vec<u64>> {
+    let mut sizes = vec![0u64; n as usize];
+    if n > 0 {
         // SAFETY: the queries were written by the completed submission.
         unsafe {
             ctx.device.get_query_pool_results(
                 pool,
                 0,
-                &mut compact_sizes,
+                &mut sizes,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
         }
-        .vk("vkGetQueryPoolResults")
-    });
-    // SAFETY: the pool is no longer used.
-    unsafe { ctx.device.destroy_query_pool(pool, None) };
-    got?;
-    stats.blas_seconds = t0.elapsed().as_secs_f64();
+        .vk("vkGetQueryPoolResults")?;
+    }
+    Ok(sizes)
+}
 
-    // Compaction: copy each BLAS into a structure of its compacted size.
-    let t1 = Instant::now();
+/// Copies each bottom level into a structure of its compacted size (its own size where the
+/// query gave none); the uncompacted ones are freed.
+fn compact(
+    ctx: &Context,
+    blases: Vec<AccelerationStructure>,
+    compact_sizes: &[u64],
+    stats: &mut BuildStats,
+) -> Result<Vec<AccelerationStructure>> {
+    let a = accel(ctx)?;
     let mut compacted = Vec::with_capacity(blases.len());
-    for (b, &size) in blases.iter().zip(&compact_sizes) {
+    for (b, &size) in blases.iter().zip(compact_sizes) {
         let size = if size == 0 { b._buffer.size } else { size };
         compacted.push(create_as(
             ctx,
@@ -301,22 +380,7 @@ pub fn build(
         })?;
     }
     drop(blases);
-    stats.compaction_seconds = t1.elapsed().as_secs_f64();
-
-    // Top level.
-    let t2 = Instant::now();
-    let (tlas, instance_buffer, tlas_bytes) = build_top(ctx, &compacted, instances, None)?
-        .ok_or_else(|| Error::Invalid("no top level was built".into()))?;
-    stats.tlas_bytes = tlas_bytes;
-    stats.tlas_seconds = t2.elapsed().as_secs_f64();
-    ctx.count_builds(compacted.len(), 1);
-    Ok(RayQueryScene {
-        _blases: compacted,
-        tlas,
-        _instances: instance_buffer,
-        instance_count: instances.len(),
-        stats,
-    })
+    Ok(compacted)
 }
 
 fn raw_instances(

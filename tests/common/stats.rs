@@ -1,5 +1,5 @@
-//! Statistics shared by the test-support modules.
-#![allow(dead_code)]
+//! Special functions and significance tests: normal, Student's t and chi-square tails, means
+//! with their standard errors.
 
 /// Complementary error function, relative error < 1.2e-7 everywhere (Numerical Recipes `erfcc`,
 /// Chebyshev fit); good enough for p-values down to 1e-30 and for the exact Smith Lambda.
@@ -39,6 +39,20 @@ pub fn z_for(alpha: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
+pub fn erf(x: f64) -> f64 {
+    1.0 - erfc(x)
+}
+
+/// Two-sided p-value of a standard normal statistic.
+pub fn normal_two_sided_p(z: f64) -> f64 {
+    erfc(z.abs() / std::f64::consts::SQRT_2)
+}
+
+/// One-sided p-value P(Z > z).
+pub fn normal_upper_p(z: f64) -> f64 {
+    0.5 * erfc(z / std::f64::consts::SQRT_2)
+}
+
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, 9 terms; relative error ~1e-15).
 fn ln_gamma(x: f64) -> f64 {
     const G: [f64; 9] = [
@@ -54,10 +68,11 @@ fn ln_gamma(x: f64) -> f64 {
     ];
     let x = x - 1.0;
     let t = x + 7.5;
-    let a = G[1..]
+    let a = G
         .iter()
         .enumerate()
-        .fold(G[0], |acc, (i, &g)| acc + g / (x + i as f64 + 1.0));
+        .skip(1)
+        .fold(G[0], |acc, (i, &g)| acc + g / (x + i as f64));
     0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
 }
 
@@ -123,4 +138,81 @@ pub fn t_for(alpha: f64, dof: f64) -> f64 {
         }
     }
     0.5 * (lo + hi)
+}
+
+/// Welch's degrees of freedom of a sum of independent variance estimates (v_i, dof_i).
+pub fn welch_dof(parts: &[(f64, f64)]) -> f64 {
+    let total: f64 = parts.iter().map(|p| p.0).sum();
+    let denom: f64 = parts.iter().map(|p| p.0 * p.0 / p.1).sum();
+    if denom > 0.0 {
+        total * total / denom
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Regularised upper incomplete gamma Q(a, x) (Numerical Recipes gser/gcf).
+fn gamma_q(a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    let gln = ln_gamma(a);
+    if x < a + 1.0 {
+        let mut ap = a;
+        let mut sum = 1.0 / a;
+        let mut del = sum;
+        for _ in 0..100_000 {
+            ap += 1.0;
+            del *= x / ap;
+            sum += del;
+            if del.abs() < sum.abs() * 1e-15 {
+                break;
+            }
+        }
+        1.0 - sum * (-x + a * x.ln() - gln).exp()
+    } else {
+        let tiny = 1e-300;
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / tiny;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..100_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = b + an / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            let del = d * c;
+            h *= del;
+            if (del - 1.0).abs() < 1e-15 {
+                break;
+            }
+        }
+        (-x + a * x.ln() - gln).exp() * h
+    }
+}
+
+/// P(X >= x) for X chi-square distributed with `dof` degrees of freedom.
+pub fn chi2_sf(x: f64, dof: f64) -> f64 {
+    gamma_q(0.5 * dof, 0.5 * x)
+}
+
+/// Mean and standard error of the mean of `v` (sample variance).
+pub fn mean_and_error(v: impl Iterator<Item = f64>) -> (f64, f64, usize) {
+    let (mut n, mut s, mut s2) = (0usize, 0.0f64, 0.0f64);
+    for x in v {
+        n += 1;
+        s += x;
+        s2 += x * x;
+    }
+    let nf = n as f64;
+    let mean = s / nf;
+    let var = ((s2 - nf * mean * mean) / (nf - 1.0)).max(0.0);
+    (mean, (var / nf).sqrt(), n)
 }

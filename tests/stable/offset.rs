@@ -82,18 +82,18 @@ fn offset_ray_origin_avoids_self_intersection() {
                                 r32(side * ce * normal + se * (phi.cos() * t + phi.sin() * b));
                             let rec = if shape.starts_with("rect") {
                                 record(
-                                    v4(p, side),
-                                    v4(centre, 0.0),
-                                    v4(u, 0.0),
-                                    v4(v, 0.0),
+                                    f4(p, side),
+                                    f4(centre, 0.0),
+                                    f4(u, 0.0),
+                                    f4(v, 0.0),
                                     dir,
                                     CASE_OFFSET_RECT,
                                 )
                             } else {
                                 record(
-                                    v4(p, side),
-                                    v4(centre, 0.5 * size),
-                                    v4(n_disk, 0.0),
+                                    f4(p, side),
+                                    f4(centre, 0.5 * size),
+                                    f4(n_disk, 0.0),
                                     [0.0; 4],
                                     dir,
                                     CASE_OFFSET_DISK,

@@ -26,7 +26,7 @@ fn sun_cone_is_stable() {
             let d = r32(d);
             for &(ux, uy) in &us {
                 recs.push(record(
-                    v4(d, om),
+                    f4(d, om),
                     [ux as f32, uy as f32, 0.0, 0.0],
                     [0.0; 4],
                     [0.0; 4],

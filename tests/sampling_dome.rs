@@ -1,10 +1,17 @@
 //! Dome sampling: the tables of every map convention (src/gpu_scene/dome.rs) against independent
-//! f64 weights and chi-square tests of the GPU sampler, and the table builder's edge cases.
+//! f64 weights and chi-square tests of the GPU sampler (glsl/shared/light_sampling.glsl through
+//! glsl/tests/sample_light.comp; the harness is tests/common/lights.rs), and the table builder's
+//! edge cases.
 
-use super::*;
-use glam::{DVec2, Vec3, Vec4};
+mod common;
+
+use common::lights::*;
+use common::*;
+use glam::{DVec2, DVec3, Vec3, Vec4};
 use illum::gpu_scene::dome;
+use illum::layout::*;
 use illum::scene::{DomeConvention, dome_map};
+use std::f64::consts::PI;
 
 fn texture(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> Vec4) -> illum::scene::Texture {
     let mut texels = Vec::with_capacity((w * h) as usize);

@@ -1,10 +1,13 @@
-//! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`): shuffled, Owen-scrambled
-//! Sobol pairs. Their structure is checked exactly (the first 2^17 even, or odd, samples of a pixel
-//! put one point of every pair in each elementary interval of area 2^-17), and their randomization
-//! by chi-square tests over many pixels: each point uniform, and pairs of one sample, and the even
-//! and the odd sequence, independent of each other.
+//! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`, through
+//! glsl/tests/rng_check.comp): shuffled, Owen-scrambled Sobol pairs. Their structure is checked
+//! exactly (the first 2^17 even, or odd, samples of a pixel put one point of every pair in each
+//! elementary interval of area 2^-17), and their randomization by chi-square tests over many
+//! pixels: each point uniform, and pairs of one sample, and the even and the odd sequence,
+//! independent of each other.
 
-use super::*;
+mod common;
+
+use common::*;
 
 fn draw(k: &Kernel, inputs: &[[u32; 4]]) -> Vec<[f32; 4]> {
     k.run(&[0u32; 4], inputs, 0, inputs.len(), 0, inputs.len())

@@ -1,0 +1,24 @@
+//! The illum binary and the files the CLI tests write.
+
+/// The illum binary, with validation on.
+pub fn illum_command() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_illum"));
+    c.env("ILLUM_VALIDATION", "1");
+    c
+}
+
+/// Runs the illum binary with validation on: (exit code, stderr).
+pub fn illum_cli(args: &[&str]) -> (i32, String) {
+    let out = illum_command().args(args).output().expect("running illum");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A unique path in the temporary directory.
+pub fn temp_path(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("illum-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}

@@ -1,0 +1,109 @@
+//! Renders of test scenes on validated contexts, and what is read off them.
+
+use super::{assert_no_validation_messages, context, scene, trace_mode};
+use illum::render::{RenderOutput, RenderSettings, Renderer};
+use illum::scene::Scene;
+use illum::vk::Context;
+
+pub fn render_with(ctx: &Context, scene: &Scene, spp: u32, seed: u64) -> RenderOutput {
+    let settings = RenderSettings {
+        spp,
+        seed,
+        trace: trace_mode(),
+        ..Default::default()
+    };
+    Renderer::new(ctx.clone())
+        .render(scene, &settings, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("render failed: {e}"))
+}
+
+/// One render per seed with the same renderer (its kernels compiled once).
+pub fn render_seeds(
+    renderer: &Renderer,
+    scene: &Scene,
+    s: &RenderSettings,
+    seeds: &[u64],
+) -> Vec<RenderOutput> {
+    renderer
+        .render_seeds(scene, s, seeds, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("render failed: {e}"))
+}
+
+/// Every pixel of every render exactly black, and shadow rays traced (more than two per pixel of
+/// a `w` x `h` image): a fully shadowed scene.
+pub fn assert_shadowed_black(outs: &[RenderOutput], w: u32, h: u32, name: &str) {
+    for o in outs {
+        for p in &o.film.beauty {
+            assert_eq!(*p, [0.0; 3], "{name}: a shadowed pixel is lit");
+        }
+        assert!(
+            o.stats.rays > u64::from(w * h * 2),
+            "{name}: shadow rays were traced"
+        );
+    }
+}
+
+/// Renders on a fresh validated context and checks that validation stayed silent.
+pub fn render(json: &str, spp: u32) -> RenderOutput {
+    let ctx = context();
+    let out = render_with(&ctx, &scene(json), spp, 0);
+    assert_no_validation_messages(&ctx);
+    out
+}
+
+/// Rec. 709 luminance of a pixel.
+pub fn luminance(p: [f32; 3]) -> f64 {
+    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+}
+
+/// Independent renders (one per seed) summarised per `block` x `block` pixel block (whole
+/// blocks only), followed by the whole image: for each, the mean luminance over the seeds and
+/// the variance of that mean from the seeds' scatter.
+pub fn block_stats(outs: &[RenderOutput], block: u32) -> Vec<(f64, f64)> {
+    let per: Vec<Vec<f64>> = outs
+        .iter()
+        .map(|o| {
+            let f = &o.film;
+            let (bx, by) = (f.width / block, f.height / block);
+            let mut v = vec![0.0; (bx * by) as usize + 1];
+            for y in 0..f.height {
+                for x in 0..f.width {
+                    let l = luminance(f.beauty[(y * f.width + x) as usize]);
+                    if x < bx * block && y < by * block {
+                        v[((y / block) * bx + x / block) as usize] += l / f64::from(block * block);
+                    }
+                    v[(bx * by) as usize] += l / f64::from(f.width * f.height);
+                }
+            }
+            v
+        })
+        .collect();
+    let k = per.len() as f64;
+    (0..per[0].len())
+        .map(|b| {
+            let m = per.iter().map(|p| p[b]).sum::<f64>() / k;
+            let var = per.iter().map(|p| (p[b] - m).powi(2)).sum::<f64>() / (k - 1.0);
+            (m, var / k)
+        })
+        .collect()
+}
+
+/// The channels of a film's EXR: beauty, then the AOV planes.
+pub const EXR_CHANNELS: [&str; 16] = [
+    "R",
+    "G",
+    "B",
+    "Albedo.R",
+    "Albedo.G",
+    "Albedo.B",
+    "N.X",
+    "N.Y",
+    "N.Z",
+    "Z",
+    "Emission.R",
+    "Emission.G",
+    "Emission.B",
+    "Variance.R",
+    "Variance.G",
+    "Variance.B",
+];
