@@ -326,3 +326,44 @@ fn sample_counts_past_32_bits_are_refused() {
         assert!(!out.exists(), "{args:?} wrote an image");
     }
 }
+
+/// A film that cannot fit the memory budget is refused before any work, with the figures (a
+/// 4096^2 render once grew to 15 GB and was killed, or crashed inside the driver).
+#[test]
+fn a_film_over_the_memory_limit_is_refused_before_it_starts() {
+    let dir = fresh_dir("memory-limit");
+    let out = dir.join("big.exr");
+    let (code, err) = run(&[
+        "render",
+        "--integrator",
+        "direct",
+        "--width",
+        "1024",
+        "--height",
+        "1024",
+        "--spp",
+        "1",
+        "--memory-limit",
+        "100M",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    // 656 B a pixel for a direct film: 687.9 MB for 1024^2.
+    assert!(
+        err.contains("1024x1024 film needs about 687.9 MB")
+            && err.contains("--memory-limit")
+            && err.contains("100.0 MB"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    let (code, err) = run(&[
+        "render",
+        "--memory-limit",
+        "lots",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("lots"), "{err}");
+}

@@ -52,6 +52,10 @@ pub struct RenderArgs {
     pub technique: Option<String>,
     #[command(flatten)]
     pub integrator: IntegratorArgs,
+    /// Host memory the film may take (e.g. 8G, 512MiB); a render that would need more is refused
+    /// before it starts. [default: the memory available]
+    #[arg(long, value_name = "SIZE", value_parser = crate::film::memory::parse_bytes)]
+    pub memory_limit: Option<u64>,
     /// Firefly clamp: scale down (keeping the hue) any camera sample whose direct lighting has a
     /// luminance above this. Biased when on (the summary and the EXR header say so). [default: off]
     #[arg(long)]
@@ -168,6 +172,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         reference,
         evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
         clamp: a.clamp,
+        memory_limit: a.memory_limit,
         cancel: Some(cancel),
         ..Default::default()
     };
@@ -463,6 +468,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         seed: a.seed,
         trace: a.trace,
         clamp: a.clamp,
+        memory_limit: a.memory_limit,
         cancel: Some(cancel),
         samples,
         crop,

@@ -23,6 +23,7 @@
 use crate::error::Result;
 use crate::layout::FilmPixel;
 mod image;
+pub mod memory;
 
 use crate::vk::{Buffer, Context};
 pub use image::{AovPlane, Film};

@@ -33,6 +33,49 @@ pub fn check_trace(prepared: &PreparedScene, mode: TraceMode) -> Result<()> {
     Ok(())
 }
 
+/// Fails, naming the figures, when the film of a render of `window` (for `seeds` seeds) would
+/// need more host memory than the settings' limit or, without one, than the machine has
+/// available.
+pub fn check_memory(
+    settings: &RenderSettings,
+    window: Window,
+    planes: usize,
+    seeds: usize,
+) -> Result<()> {
+    use crate::film::memory;
+    let evaluate = settings.evaluate_passes || settings.reference.is_some();
+    let job = settings.samples.is_some_and(|r| r != (0, settings.spp));
+    let per_pixel = memory::bytes_per_pixel(planes, evaluate, job);
+    let pixels = window.pixels() as u64;
+    // Each seed's output keeps its sums and planes.
+    let need = memory::film_bytes(pixels, planes, evaluate, job).saturating_add(
+        (seeds.max(1) as u64 - 1).saturating_mul(pixels * (16 * film::channels(planes) as u64)),
+    );
+    let (limit, what) = match settings.memory_limit {
+        Some(l) => (l, "the memory limit (--memory-limit)"),
+        None => match memory::available_bytes() {
+            Some(a) => (
+                a,
+                "the memory available (MemAvailable, or the control group's limit)",
+            ),
+            None => return Ok(()),
+        },
+    };
+    if need.saturating_add(memory::PROCESS_BYTES) > limit {
+        return Err(Error::Invalid(format!(
+            "a {}x{} film needs about {} of host memory ({per_pixel} B a pixel: exact sums, \
+             a block read back, resolved planes) besides {} for the driver and kernels, more \
+             than {what}, {}; render it in parts (--part, --crop) or at a lower resolution",
+            window.width(),
+            window.height(),
+            memory::format_bytes(need),
+            memory::format_bytes(memory::PROCESS_BYTES),
+            memory::format_bytes(limit)
+        )));
+    }
+    Ok(())
+}
+
 /// An integrator with its kernels, configured for one render.
 pub struct Setup {
     pub integrator: Arc<dyn Integrator>,

@@ -210,6 +210,12 @@ impl Renderer {
         settings.check(w, h)?;
         let (range, window) = settings.job(w, h)?;
         driver::check_trace(prepared, settings.trace)?;
+        driver::check_memory(
+            settings,
+            window,
+            settings.integrator.aov_planes().len(),
+            seeds.len(),
+        )?;
         let setup = driver::Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
         let frame = ctx.upload(
             "frame",

@@ -41,6 +41,9 @@ pub struct RenderSettings {
     pub samples: Option<(u32, u32)>,
     /// Render only this pixel window.
     pub crop: Option<Window>,
+    /// Host memory the film may take, in bytes (None: what the machine has available); a
+    /// render that would need more is refused before it starts (src/film/memory.rs).
+    pub memory_limit: Option<u64>,
 }
 
 impl RenderSettings {
@@ -122,6 +125,7 @@ impl RenderSettings {
             inject_non_finite: 0,
             samples: None,
             crop: None,
+            memory_limit: None,
         }
     }
 }
