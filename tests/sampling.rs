@@ -1,4 +1,4 @@
-//! glsl/shared/light_sampling.glsl, irradiance.glsl and mis.glsl on the GPU (glsl/tests/
+//! glsl/shared/light_sampling.glsl, irradiance.glsl and mis.glsl on the GPU (tests/kernels/
 //! sample_light.comp, irradiance_check.comp, mis_check.comp), and the dome tables of
 //! src/gpu_scene/dome.rs: chi-square tests of every light sampler against its own pdf(), pdf
 //! consistency per sample, analytic irradiance against float64 references validated by Monte Carlo
@@ -131,7 +131,7 @@ struct Lights {
 impl Lights {
     fn new() -> Lights {
         let ctx = context();
-        let k = Kernel::new(&ctx, "sample_light", illum::shaders::SAMPLE_LIGHT_PLAIN);
+        let k = Kernel::new(&ctx, "sample_light", illum_test_kernels::SAMPLE_LIGHT_PLAIN);
         Lights { ctx, k }
     }
     fn sample(&self, prm: &LightParams, n: usize, seed: u32) -> Samples {
@@ -1017,7 +1017,7 @@ fn irradiance_matches_references() {
     let k = Kernel::new(
         &ctx,
         "irradiance_check",
-        illum::shaders::IRRADIANCE_CHECK_PLAIN,
+        illum_test_kernels::IRRADIANCE_CHECK_PLAIN,
     );
     let z = DVec3::Z;
     let o = DVec3::ZERO;
@@ -1324,7 +1324,7 @@ fn irradiance_matches_references() {
 #[test]
 fn mis_weights_are_bounded_and_sum_to_one() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "mis_check", illum::shaders::MIS_CHECK_PLAIN);
+    let k = Kernel::new(&ctx, "mis_check", illum_test_kernels::MIS_CHECK_PLAIN);
     let counts = [0.0f32, 1.0, 4.0, 16.0];
     // The smallest normal float, not a subnormal: GPUs may flush subnormals to zero (Vulkan
     // allows it without denormPreserve; NVIDIA does).
@@ -1420,7 +1420,7 @@ fn mis_weights_are_bounded_and_sum_to_one() {
 #[test]
 fn inverse_trigonometry_is_accurate() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "trig_check", illum::shaders::TRIG_CHECK_PLAIN);
+    let k = Kernel::new(&ctx, "trig_check", illum_test_kernels::TRIG_CHECK_PLAIN);
     let n = 1 << 18;
     let input: Vec<[f32; 4]> = (0..n)
         .map(|i| {

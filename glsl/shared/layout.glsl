@@ -6,7 +6,7 @@
 // lines right above a struct document it, a member's trailing comment (and comment lines directly
 // below it) document that member. Scalar block layout everywhere; members are ordered so that
 // std430 gives the same offsets and sizes (build.rs fails otherwise). tests/layout.rs checks every
-// size and offset against the offsets glslang emits for glsl/tests/layout_check.comp, and that this
+// size and offset against the offsets glslang emits for tests/kernels/layout_check.comp, and that this
 // header, that kernel and the Rust mirrors name the same structs.
 #ifndef ILLUM_LAYOUT_GLSL
 #define ILLUM_LAYOUT_GLSL

@@ -1,5 +1,5 @@
 //! Shared machinery of tests/sampling.rs and tests/brdf.rs: running the GLSL test kernels of
-//! glsl/tests/ on a validated context, and the statistics (chi-square goodness of fit the
+//! tests/kernels/ on a validated context, and the statistics (chi-square goodness of fit the
 //! pbrt-v4 / Mitsuba 3 way, z-tests, Šidák correction).
 //!
 //! Chi-square goodness of fit of a direction sampler against its own pdf():
@@ -57,7 +57,7 @@ pub fn assert_no_validation_messages(ctx: &Context) {
 // ---------------------------------------------------------------------------------------------
 // Kernels
 
-/// A test kernel of glsl/tests/: binding 0 parameters, 1 input, 2 output (storage buffers), push
+/// A test kernel of tests/kernels/: binding 0 parameters, 1 input, 2 output (storage buffers), push
 /// constants (mode, count, seed, 0); one invocation per item, 64 per workgroup.
 pub struct Kernel {
     ctx: Context,
