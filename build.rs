@@ -81,13 +81,16 @@ struct GlslField {
     name: String,
     array: Option<usize>,
     doc: Vec<String>,
+    /// The names of its floats, from a `// channels: a b ...` line below it (a film's channels).
+    channels: Option<Vec<String>>,
 }
 
 /// Parses every `struct Name { ... };` of the shared header. The `//` lines right above a struct
 /// (no blank line between) document it. Inside, each member is one `type name;` or
 /// `type name[N];` line; its trailing `//` comment, and the comment-only lines that directly
 /// follow it, document it; comment-only lines after a blank line (or first in the struct)
-/// document the next member.
+/// document the next member. A `// channels: a b ...` line among those that follow a member names
+/// its floats instead (see `film_channels`).
 fn parse_structs(header: &Path, text: &str) -> Vec<GlslStruct> {
     let mut structs: Vec<GlslStruct> = Vec::new();
     let mut pending: Vec<String> = Vec::new();
@@ -126,7 +129,12 @@ fn parse_structs(header: &Path, text: &str) -> Vec<GlslStruct> {
             after_field = false;
         } else if line.starts_with("//") {
             match s.fields.last_mut() {
-                Some(f) if after_field => f.doc.push(comment(line)),
+                Some(f) if after_field => match comment(line).strip_prefix("channels:") {
+                    Some(names) => {
+                        f.channels = Some(names.split_whitespace().map(String::from).collect())
+                    }
+                    None => f.doc.push(comment(line)),
+                },
                 _ => pending.push(comment(line)),
             }
         } else {
@@ -159,6 +167,7 @@ fn parse_structs(header: &Path, text: &str) -> Vec<GlslStruct> {
                 name,
                 array,
                 doc,
+                channels: None,
             });
             after_field = true;
         }
@@ -210,6 +219,76 @@ fn glsl_type(
         .iter()
         .find(|(name, ..)| name == ty)
         .map(|(name, a, a430, size)| (name.clone(), *a, *a430, *size))
+}
+
+/// For a struct whose members name their floats (`// channels:` lines: a film), its channel count,
+/// each member's first channel and the channels' names, as associated constants of the mirror, so
+/// that the host reads the film by the header's layout. Panics unless every member is floats and
+/// names each of them once.
+fn film_channels(header: &Path, st: &GlslStruct, size: usize) -> String {
+    let mut consts = String::new();
+    let mut names: Vec<&str> = Vec::new();
+    for f in &st.fields {
+        let at = || format!("{}: {}.{}", header.display(), st.name, f.name);
+        let per = match f.ty.as_str() {
+            "float" => 1,
+            t => match t.strip_prefix("vec").and_then(|n| n.parse::<usize>().ok()) {
+                Some(n) => n,
+                None => panic!("{}: a film's members are float or vecN, not {t}", at()),
+            },
+        };
+        let count = per * f.array.unwrap_or(1);
+        let Some(channels) = &f.channels else {
+            panic!(
+                "{}: name its {count} channels on a `// channels:` line",
+                at()
+            );
+        };
+        assert!(
+            channels.len() == count,
+            "{}: {count} floats, but {} channel names",
+            at(),
+            channels.len()
+        );
+        writeln!(
+            consts,
+            "    /// The first channel of `{}`: {}.",
+            f.name,
+            channels.join(", ")
+        )
+        .unwrap();
+        writeln!(
+            consts,
+            "    pub const {}: usize = {};",
+            f.name.to_uppercase(),
+            names.len()
+        )
+        .unwrap();
+        for c in channels {
+            assert!(!names.contains(&c.as_str()), "{}: channel {c} twice", at());
+            names.push(c);
+        }
+    }
+    assert!(
+        names.len() * 4 == size,
+        "{}: {} is not all floats",
+        header.display(),
+        st.name
+    );
+    let mut s = format!(
+        "\n/// The channels of a {0}: its floats in order, named by the `channels:` lines of\n\
+         /// glsl/shared/layout.glsl.\nimpl {0} {{\n    /// Floats in one {0}.\n    \
+         pub const CHANNELS: usize = {1};\n",
+        st.name,
+        names.len()
+    );
+    s.push_str(&consts);
+    s.push_str("    /// Every channel's name, in order.\n    pub const CHANNEL_NAMES: [&'static str; Self::CHANNELS] = [\n");
+    for n in &names {
+        writeln!(s, "        \"{n}\",").unwrap();
+    }
+    s.push_str("    ];\n}\n");
+    s
 }
 
 /// The Rust mirrors of the header's structs: `#[repr(C)]` structs with the same member names,
@@ -297,6 +376,9 @@ fn layout_structs(header: &Path) -> String {
             st.name
         );
         known.push((st.name.clone(), align, align430, size));
+        if st.fields.iter().any(|f| f.channels.is_some()) {
+            s.push_str(&film_channels(header, st, size));
+        }
     }
     s.push_str(
         "\n/// Every struct of the header, in its order.\npub const STRUCT_NAMES: &[&str] = &[\n",

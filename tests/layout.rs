@@ -155,6 +155,41 @@ fn constants_are_generated_from_the_header() {
     assert_eq!(illum::layout::MASK_GEOMETRY | illum::layout::MASK_LIGHTS, 3);
 }
 
+/// The film's channel constants (from the header's `channels:` lines) follow the mirror's
+/// members, and keep the names partial EXRs already store.
+#[test]
+fn film_channels_are_generated_from_the_header() {
+    use illum::layout::FilmPixel;
+    use std::mem::offset_of;
+    assert_eq!(FilmPixel::CHANNELS * 4, std::mem::size_of::<FilmPixel>());
+    for (first, offset) in [
+        (FilmPixel::BEAUTY, offset_of!(FilmPixel, beauty)),
+        (FilmPixel::BEAUTY_SQ, offset_of!(FilmPixel, beauty_sq)),
+        (FilmPixel::ALBEDO, offset_of!(FilmPixel, albedo)),
+        (FilmPixel::NORMAL, offset_of!(FilmPixel, normal)),
+        (FilmPixel::EMISSION, offset_of!(FilmPixel, emission)),
+        (FilmPixel::BEAUTY_ODD, offset_of!(FilmPixel, beauty_odd)),
+    ] {
+        assert_eq!(first * 4, offset);
+    }
+    let names = FilmPixel::CHANNEL_NAMES;
+    assert_eq!(
+        (
+            names[0], names[3], names[7], names[11], names[15], names[19], names[23]
+        ),
+        (
+            "beauty.r",
+            "clamped",
+            "rays",
+            "hits",
+            "depth",
+            "non_finite",
+            "odd.unused"
+        )
+    );
+    assert_eq!(illum::layout::AOV_CHANNELS, 4);
+}
+
 /// The names of the `struct Name {` lines of a GLSL or Rust source, read as plain text (not by
 /// build.rs's parser, so that a struct the generator skipped shows up too).
 fn declared_structs(source: &str, keyword: &str) -> BTreeSet<String> {

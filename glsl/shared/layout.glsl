@@ -22,6 +22,8 @@
 //     layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
 // and adds to it as to the film (one invocation owns a pixel: no atomics).
 #define BINDING_AOVS 4
+// Floats of one AOV plane's sums at a pixel (its vec4), as the host reads them.
+#define AOV_CHANNELS 4
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
 #define BINDING_IMAGE 5   // the host's storage image (glsl/resolve_image.comp)
@@ -365,14 +367,23 @@ struct GpuTexture {
 };
 
 // Accumulated per pixel over all samples so far (sums, divided by the sample count on readback).
+// Each member's `channels:` line names its floats: the film channels the host reads
+// (src/render/film.rs) and partial EXRs store, whose count, offsets and names build.rs generates
+// from these lines.
 struct FilmPixel {
     vec4 beauty;     // rgb sum; w = samples the firefly clamp reduced
+                     // channels: beauty.r beauty.g beauty.b clamped
     vec4 beauty_sq;  // rgb sum of squares (for the variance of the mean); w = rays traced
+                     // channels: beauty_sq.r beauty_sq.g beauty_sq.b rays
     vec4 albedo;     // rgb sum over samples that hit a surface; w = number of such samples
+                     // channels: albedo.r albedo.g albedo.b hits
     vec4 normal;     // xyz sum of shading normals; w = sum of hit distances
+                     // channels: normal.x normal.y normal.z depth
     vec4 emission;   // rgb sum of directly seen emission; w = samples with non-finite beauty
+                     // channels: emission.r emission.g emission.b non_finite
     vec4 beauty_odd; // rgb sum over the odd-numbered samples only: the two half-buffers (even =
                      // beauty - beauty_odd) give an unbiased estimate of the pixel's variance
+                     // channels: odd.r odd.g odd.b odd.unused
 };
 
 // The compute BVH: device addresses of its arrays (uniform buffer at BINDING_BVH).

@@ -16,7 +16,7 @@ pub use file::{
     abort_writes, check_distinct, check_writable, resolve_target, same_file, temp_path_for,
     write_atomically,
 };
-pub use openexr::{ExrImage, read_exr, read_reference, write_exr};
+pub use openexr::{ExrImage, FILM_LAYERS, read_exr, read_reference, write_exr};
 pub use png::write_png;
 
 /// Linear, scene-referred image planes of one render, row-major, top row first, width*height each.

@@ -114,6 +114,11 @@ fn layer_attributes(path: &Path, meta: &ImageMetadata) -> Result<LayerAttributes
     Ok(attributes)
 }
 
+/// The EXR layers of the film's own RGB planes besides the beauty (`R`, `G`, `B`) and `Z`: albedo,
+/// normal, emission and variance (`<layer>.R/G/B`, the normal's `.X/Y/Z`). AOV planes take other
+/// names (render::film::check_aov_names).
+pub const FILM_LAYERS: [&str; 4] = ["Albedo", "N", "Emission", "Variance"];
+
 /// Where one EXR channel's samples live in the film.
 #[derive(Clone, Copy)]
 enum Source<'a> {
@@ -144,12 +149,13 @@ impl<'a> FilmChannels<'a> {
             }
         };
         const RGB: [&str; 3] = ["R", "G", "B"];
+        let [albedo, normal, emission, variance_layer] = FILM_LAYERS;
         add("", RGB, &film.beauty);
-        add("Albedo", RGB, &film.albedo);
-        add("N", ["X", "Y", "Z"], &film.normal);
-        add("Emission", RGB, &film.emission);
+        add(albedo, RGB, &film.albedo);
+        add(normal, ["X", "Y", "Z"], &film.normal);
+        add(emission, RGB, &film.emission);
         if let Some(variance) = &film.variance {
-            add("Variance", RGB, variance);
+            add(variance_layer, RGB, variance);
         }
         for aov in &film.aovs {
             add(&aov.name, RGB, &aov.rgb);
