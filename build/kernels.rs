@@ -30,7 +30,7 @@ pub fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
 
 /// Compiles every kernel (`*.comp`) of `sources` in each of its variants into `out` and returns
 /// the Rust index of their SPIR-V (`pub const <STEM>_<VARIANT>: &[u8]`), headed by `header`.
-/// Includes resolve against `glsl`. Panics (failing the build) with every compiler message.
+/// Includes are paths from `glsl`. Panics (failing the build) with every compiler message.
 pub fn compile_kernels(glsl: &Path, sources: &[PathBuf], out: &Path, header: &str) -> String {
     let compiler = shaderc::Compiler::new().expect("shaderc: cannot create a compiler");
     let mut index = format!("{header}\n");
@@ -105,23 +105,18 @@ pub fn compile(
     for d in defines {
         opts.add_macro_definition(d, Some("1"));
     }
-    let shared = glsl.join("shared");
+    // Every include names a path from glsl/ (`#include "lights/light_tree.glsl"`), whoever
+    // includes it: one name per file, the same in every folder.
     let glsl_root = glsl.to_path_buf();
     opts.set_include_callback(move |name, _ty, from, _depth| {
-        let candidates = [
-            Path::new(from).parent().map(|p| p.join(name)),
-            Some(shared.join(name)),
-            Some(glsl_root.join(name)),
-        ];
-        for c in candidates.into_iter().flatten() {
-            if let Ok(content) = fs::read_to_string(&c) {
-                return Ok(shaderc::ResolvedInclude {
-                    resolved_name: c.to_string_lossy().into_owned(),
-                    content,
-                });
-            }
+        let path = glsl_root.join(name);
+        match fs::read_to_string(&path) {
+            Ok(content) => Ok(shaderc::ResolvedInclude {
+                resolved_name: path.to_string_lossy().into_owned(),
+                content,
+            }),
+            Err(e) => Err(format!("{from}: include \"{name}\" (a path from glsl/): {e}")),
         }
-        Err(format!("{from}: cannot find include \"{name}\""))
     });
     let file = path.to_string_lossy();
     compiler

@@ -1,4 +1,4 @@
-//! glsl/shared/microfacet.glsl on the GPU (tests/kernels/sample_brdf.comp): chi-square tests of every
+//! glsl/scene/microfacet.glsl on the GPU (tests/kernels/sample_brdf.comp): chi-square tests of every
 //! sampler against its own pdf, the D-BRDF's weight = F identity, directional albedos against
 //! quadrature references (and the tables of docs/techniques.md, "Reference values"), Fresnel, the
 //! delta lobe and invalid input.

@@ -1,4 +1,4 @@
-//! glsl/shared/light_sampling.glsl, irradiance.glsl and mis.glsl on the GPU (tests/kernels/
+//! glsl/lights/light_sampling.glsl, irradiance.glsl and mis.glsl on the GPU (tests/kernels/
 //! sample_light.comp, irradiance_check.comp, mis_check.comp), and the dome tables of
 //! src/gpu_scene/dome.rs: chi-square tests of every light sampler against its own pdf(), pdf
 //! consistency per sample, analytic irradiance against float64 references validated by Monte Carlo
@@ -718,7 +718,7 @@ fn pdf_integrates_to_one_and_is_zero_off_the_light() {
     let dirs: Vec<[f32; 4]> = (0..n).map(|_| f4(rng.sphere(), 0.0)).collect();
     // Each case's sampler: how much of it is area or solid-angle sampling (pdf integrates to 1)
     // and how much uniform sampling of the hemisphere facing a planar emitter (integrates to the
-    // emitter's Omega / (2 pi): a miss is no sample; glsl/shared/light_sampling.glsl).
+    // emitter's Omega / (2 pi): a miss is no sample; glsl/lights/light_sampling.glsl).
     const WHOLE: (f64, f64) = (1.0, 0.0);
     const HEMISPHERE: (f64, f64) = (0.0, 1.0);
     const MIXTURE: (f64, f64) = (0.5, 0.5);

@@ -25,7 +25,7 @@
 // its cell's keys at the cone width the render's lookups there will have. The host averages the
 // records into the next generation's table.
 #version 460
-#include "indirect.glsl"
+#include "indirect/indirect.glsl"
 #include "film/film.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;

@@ -18,7 +18,7 @@
 #ifndef ILLUM_INDIRECT_GLSL
 #define ILLUM_INDIRECT_GLSL
 
-#include "direct.glsl"
+#include "direct/direct.glsl"
 
 // Most diffuse bounces done in place (Russian roulette ends paths long before).
 #define RADIOSITY_BRUTE_MAX 256u

@@ -8,7 +8,7 @@
 // at the camera hit), IndirectDiffuse and Reflection (paths whose first bounce took the diffuse
 // or a specular lobe).
 #version 460
-#include "indirect.glsl"
+#include "indirect/indirect.glsl"
 #include "film/film.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;

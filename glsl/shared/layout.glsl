@@ -26,7 +26,7 @@
 #define AOV_CHANNELS 4
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
-#define BINDING_IMAGE 5   // the host's storage image (glsl/resolve_image.comp)
+#define BINDING_IMAGE 5   // the host's storage image (glsl/film/resolve_image.comp)
 
 // Specialization constants.
 #define SPEC_FEATURES 0
@@ -45,7 +45,7 @@
 #define FEATURE_MANY_LIGHTS 128
 // Settings, not the scene: shadow rays for a resampled subset of the candidates
 // (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
-// Off, their code is left out of the kernels (glsl/shared/direct.glsl; docs/techniques.md,
+// Off, their code is left out of the kernels (glsl/direct/direct.glsl; docs/techniques.md,
 // "Shadow resampling", "Shadow culling").
 #define FEATURE_SHADOW_RESAMPLE 256
 #define FEATURE_SHADOW_CULL 512
@@ -83,7 +83,7 @@
 // light's own surface (emissive geometry lit by itself). A sphere then counts the point as inside
 // (float rounding cannot put it outside and sample the outer cap), a planar light skips itself.
 #define LIGHT_FLAG_SELF 8
-// A dome's map convention (docs/scene-format.md; glsl/shared/dome_map.glsl): neither bit is illum's.
+// A dome's map convention (docs/scene-format.md; glsl/lights/dome_map.glsl): neither bit is illum's.
 #define LIGHT_FLAG_DOME_MITSUBA 16
 #define LIGHT_FLAG_DOME_PBRT 32
 
@@ -315,8 +315,8 @@ struct GpuLight {
 };
 
 // Importance-sampling tables of a dome's map (src/gpu_scene/dome.rs builds them;
-// glsl/shared/light_sampling.glsl reads them) over a grid of width x height cells of its map
-// coordinates (glsl/shared/dome_map.glsl: the texels, or for the Mitsuba convention the cells
+// glsl/lights/light_sampling.glsl reads them) over a grid of width x height cells of its map
+// coordinates (glsl/lights/dome_map.glsl: the texels, or for the Mitsuba convention the cells
 // between texel centres), each weighted by the luminance the lookup gives inside it (every cell
 // where the radiance can be positive has a weight > 0) times the solid angle per unit map area at
 // its centre. width == 0: no table (uniform sphere).
@@ -439,7 +439,7 @@ struct BvhInstance {
     uint pad;
 };
 
-// A ray of glsl/trace_query.comp (the trace interface as a kernel, for tests and benchmarks).
+// A ray of glsl/trace/trace_query.comp (the trace interface as a kernel, for tests and benchmarks).
 struct QueryRay {
     vec3 origin;
     float tmin;
@@ -453,7 +453,7 @@ struct QueryRay {
     uint pad2;
 };
 
-// What glsl/trace_query.comp reports per ray: trace_closest's Hit and trace_occluded's answer.
+// What glsl/trace/trace_query.comp reports per ray: trace_closest's Hit and trace_occluded's answer.
 struct QueryHit {
     float t;
     uint kind;

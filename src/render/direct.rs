@@ -1,4 +1,4 @@
-//! The direct-lighting integrator (glsl/primary.comp, glsl/shared/direct.glsl): camera rays, the
+//! The direct-lighting integrator (glsl/direct/primary.comp, glsl/direct/direct.glsl): camera rays, the
 //! AOVs, and emission plus direct lighting at the first hit, estimated as "Physically Based
 //! Lighting at Pixar" does (docs/techniques.md, "The direct-lighting estimator").
 

@@ -1,9 +1,9 @@
-// Test kernel of glsl/shared/irradiance.glsl (tests/sampling.rs): light_irradiance() for each
+// Test kernel of glsl/lights/irradiance.glsl (tests/sampling.rs): light_irradiance() for each
 // (light, p, n) of the input.
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "irradiance.glsl"
+#include "lights/irradiance.glsl"
 
 layout(local_size_x = 64) in;
 struct IrradianceCase {

@@ -3,7 +3,7 @@
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "layout.glsl"
+#include "shared/layout.glsl"
 layout(local_size_x = 1) in;
 layout(scalar, binding = 0) buffer B0 { Frame frame_v[]; };
 layout(scalar, binding = 1) buffer B1 { PassConstants pass_v[]; };

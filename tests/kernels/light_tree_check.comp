@@ -1,11 +1,11 @@
-// Test kernel of glsl/shared/light_tree.glsl (tests/light_tree.rs). Push constants: mode, count,
+// Test kernel of glsl/lights/light_tree.glsl (tests/light_tree.rs). Push constants: mode, count,
 // seed. Mode 0: item i draws a light at its own point (inputs 2i: p, 2i + 1: n) and writes
 // (light, sampled pmf, the pmf replayed from that light's trail, 0) as uints (floats as bits).
 // Mode 1: `count` draws at the point of inputs 0 and 1, each writing (light, pmf bits, 0, 0).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "light_tree.glsl"
+#include "lights/light_tree.glsl"
 
 layout(local_size_x = 64) in;
 struct TreeTestParams {

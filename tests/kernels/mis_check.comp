@@ -1,8 +1,8 @@
-// Test kernel of glsl/shared/mis.glsl (tests/sampling.rs): for each input (N_L, p_L, N_B, p_B),
+// Test kernel of glsl/direct/mis.glsl (tests/sampling.rs): for each input (N_L, p_L, N_B, p_B),
 // (mis_light_weight, mis_brdf_weight, mis_dbrdf_light_factor, mis_dbrdf_brdf_factor).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
-#include "mis.glsl"
+#include "direct/mis.glsl"
 
 layout(local_size_x = 64) in;
 layout(scalar, binding = 0) readonly buffer ParamBlock { uvec4 unused; };

@@ -4,7 +4,7 @@
 // (pair.x, pair.y, 0, 0).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
-#include "common.glsl"
+#include "shared/common.glsl"
 
 layout(local_size_x = 64) in;
 layout(scalar, binding = 0) readonly buffer ParamBlock { uvec4 unused; };

@@ -1,11 +1,11 @@
-// Test kernel of glsl/shared/microfacet.glsl (tests/brdf.rs, tests/sampling.rs). Push constants:
+// Test kernel of glsl/scene/microfacet.glsl (tests/brdf.rs, tests/sampling.rs). Push constants:
 // mode, count, seed. Mode 0: `count` samples from brdf_sample() with u = rng(seed, i), each as three
 // vec4 (wi, pdf), (weight, brdf_eval(wi).pdf), (brdf_eval(wi).f_cos, valid + 2 delta). Mode 1:
 // brdf_eval() of the directions in the input: (f_cos, pdf). Mode 2: lobe_fresnel(input.x): (F, 0).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "microfacet.glsl"
+#include "scene/microfacet.glsl"
 
 layout(local_size_x = 64) in;
 struct BrdfTestParams {

@@ -1,11 +1,11 @@
-// Test kernel of glsl/shared/light_sampling.glsl (tests/sampling.rs). Push constants: mode, count,
+// Test kernel of glsl/lights/light_sampling.glsl (tests/sampling.rs). Push constants: mode, count,
 // seed. Mode 0: `count` samples of sample_light() at p with u = rng(seed, i), each as four vec4
 // (wi, pdf), (x, light_pdf(wi)), (uv, dist, light_hit(wi).t), (n, delta). Mode 1: light_hit() of
 // the directions in the input: (pdf, t, uv).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "light_sampling.glsl"
+#include "lights/light_sampling.glsl"
 
 layout(local_size_x = 64) in;
 struct LightTestParams {

@@ -19,8 +19,8 @@
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "light_sampling.glsl"
-#include "shapes.glsl"
+#include "lights/light_sampling.glsl"
+#include "trace/shapes.glsl"
 
 layout(local_size_x = 64) in;
 struct Record {

@@ -3,7 +3,7 @@
 // asin_accurate(c)).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
-#include "common.glsl"
+#include "shared/common.glsl"
 layout(local_size_x = 64) in;
 layout(scalar, binding = 0) readonly buffer ParamBlock { uvec4 unused; };
 layout(scalar, binding = 1) readonly buffer InputBlock { vec4 inputs[]; };

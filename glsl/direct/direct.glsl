@@ -33,12 +33,12 @@
 #ifndef ILLUM_DIRECT_GLSL
 #define ILLUM_DIRECT_GLSL
 
-#include "surface.glsl"
-#include "microfacet.glsl"
-#include "light_sampling.glsl"
-#include "mis.glsl"
-#include "light_tree.glsl"
-#include "irradiance.glsl"
+#include "scene/surface.glsl"
+#include "scene/microfacet.glsl"
+#include "lights/light_sampling.glsl"
+#include "direct/mis.glsl"
+#include "lights/light_tree.glsl"
+#include "lights/irradiance.glsl"
 
 #define DIRECT_MAX_CROSSED 16u
 #define LIGHT_BVH_STACK 32u
@@ -208,7 +208,7 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
     return sum;
 }
 
-#include "shadow.glsl"
+#include "direct/shadow.glsl"
 
 // The estimator and its conditions: docs/techniques.md, "Control variates".
 // Control variates (FEATURE_CONTROL_VARIATES): for a looped light, the N light

@@ -11,8 +11,8 @@
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
-#include "layout.glsl"
-#include "common.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer LightTreeRef { GpuLightTreeNode v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer LightTrailRef { uint v[]; };

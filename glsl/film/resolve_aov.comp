@@ -1,10 +1,10 @@
 // One AOV plane of the film into a host storage image (RenderSession::record_pass,
 // src/render/session.rs): the plane's mean over `spp` samples per pixel in RGB, alpha 1, divided
-// as glsl/resolve_image.comp divides the beauty (so it matches the host's resolve bit for bit).
+// as glsl/film/resolve_image.comp divides the beauty (so it matches the host's resolve bit for bit).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "layout.glsl"
+#include "shared/layout.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
 layout(scalar, binding = BINDING_AOVS) readonly buffer AovBlock { vec4 aovs[]; };

@@ -8,11 +8,11 @@
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
-#include "layout.glsl"
-#include "common.glsl"
-#include "dome_map.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "lights/dome_map.glsl"
 
-#include "features.glsl"
+#include "scene/features.glsl"
 
 layout(scalar, binding = BINDING_FRAME) uniform FrameBlock { Frame frame; };
 
@@ -86,7 +86,7 @@ vec4 texture_lookup(uint tex, vec2 uv) {
     return texture_at(t, r * vec2(t.width, t.height), (t.flags & TEXTURE_FLAG_NEAREST) != 0u, wrap);
 }
 
-// A dome's map at map coordinates uv, looked up as its convention does (glsl/shared/dome_map.glsl).
+// A dome's map at map coordinates uv, looked up as its convention does (glsl/lights/dome_map.glsl).
 vec4 dome_texture(GpuLight l, vec2 uv) {
     if (!has_feature(FEATURE_TEXTURES) || l.texture == NONE) return vec4(1.0);
     if (dome_is_pbrt(l)) {

@@ -6,8 +6,8 @@
 #ifndef ILLUM_TRACE_GLSL
 #define ILLUM_TRACE_GLSL
 
-#include "scene.glsl"
-#include "shapes.glsl"
+#include "scene/scene.glsl"
+#include "trace/shapes.glsl"
 
 struct Hit {
     float t;
@@ -65,7 +65,7 @@ bool trace_occluded(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     return rayQueryGetIntersectionTypeEXT(rq, true) != gl_RayQueryCommittedIntersectionNoneEXT;
 }
 #elif defined(TRACE_BVH)
-#include "trace_bvh.glsl"
+#include "trace/bvh.glsl"
 #else
 #error "no trace backend: define TRACE_RAYQUERY or TRACE_BVH"
 #endif

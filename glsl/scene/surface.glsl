@@ -3,7 +3,7 @@
 #ifndef ILLUM_SURFACE_GLSL
 #define ILLUM_SURFACE_GLSL
 
-#include "trace.glsl"
+#include "trace/trace.glsl"
 
 struct Surface {
     vec3 p;

@@ -18,7 +18,7 @@
 #ifndef ILLUM_MIS_GLSL
 #define ILLUM_MIS_GLSL
 
-#include "common.glsl"
+#include "shared/common.glsl"
 
 // 1 / (1 + r^2) for r >= 0, including r = +inf (-> 0).
 float mis_inv_one_plus_sq(float r) {

@@ -27,9 +27,9 @@
 #ifndef ILLUM_IRRADIANCE_GLSL
 #define ILLUM_IRRADIANCE_GLSL
 
-#include "layout.glsl"
-#include "features.glsl"
-#include "common.glsl"
+#include "shared/layout.glsl"
+#include "scene/features.glsl"
+#include "shared/common.glsl"
 
 const float IRR_POINT_SOLID_ANGLE = 1e-4;   // below: point approximation for rects and triangles
 const int IRR_DISK_SIDES = 32;

@@ -2,7 +2,7 @@
 // The trace interface as a kernel: per ray, trace_closest's Hit and trace_occluded's answer. Host
 // side: src/trace/query.rs (tests compare the two trace paths with it; `illum bench trace` times it).
 #version 460
-#include "trace.glsl"
+#include "trace/trace.glsl"
 
 layout(local_size_x = 64) in;
 layout(push_constant, scalar) uniform QueryBlock { QueryConstants qc; };

@@ -43,8 +43,8 @@
 #ifndef ILLUM_MICROFACET_GLSL
 #define ILLUM_MICROFACET_GLSL
 
-#include "layout.glsl"
-#include "common.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
 
 const float MF_ALPHA_MIN = 1e-4;     // clamp (mitsuba3 configure(), pbrt-v4 TrowbridgeReitz)
 const float MF_DELTA_ALPHA = 5e-5;   // below this along both axes (i.e. uploaded as 0): a delta mirror

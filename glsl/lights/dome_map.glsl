@@ -14,8 +14,8 @@
 #ifndef ILLUM_DOME_MAP_GLSL
 #define ILLUM_DOME_MAP_GLSL
 
-#include "layout.glsl"
-#include "common.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
 
 bool dome_is_mitsuba(GpuLight l) { return (l.flags & LIGHT_FLAG_DOME_MITSUBA) != 0u; }
 bool dome_is_pbrt(GpuLight l) { return (l.flags & LIGHT_FLAG_DOME_PBRT) != 0u; }

@@ -5,7 +5,7 @@
 #version 460
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#include "layout.glsl"
+#include "shared/layout.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
 layout(scalar, binding = BINDING_FILM) readonly buffer FilmBlock { FilmPixel film[]; };

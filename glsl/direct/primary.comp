@@ -1,6 +1,6 @@
 // illum-variants: rq bvh
 // Camera rays with a box pixel filter: the AOVs (albedo, normal, depth, emission) and the beauty,
-// emission seen directly plus direct lighting at the first hit (glsl/shared/direct.glsl).
+// emission seen directly plus direct lighting at the first hit (glsl/direct/direct.glsl).
 #version 460
 #include "film/film.glsl"
 

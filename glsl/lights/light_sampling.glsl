@@ -15,7 +15,7 @@
 //   makes pdf() 0 for a direction the sampler produced. The extra support has relative measure
 //   ~1e-5 (the emitter's own radiance lookup decides whether such a ray hits).
 // * LightSample.n is the emitter's geometric normal at x (not flipped toward p); the emitted side
-//   is the one with dot(n, -wi) > 0. LightSample.uv follows glsl/shared/surface.glsl's uv of the
+//   is the one with dot(n, -wi) > 0. LightSample.uv follows glsl/scene/surface.glsl's uv of the
 //   light's shape (rect: (0,0) at centre - u/2 - v/2; disk: 0.5 + local xy / (2R); sphere: lat-long
 //   of the outward normal), the dome's lat-long uv, and barycentrics (b1, b2) for triangles.
 //
@@ -45,7 +45,7 @@
 //   (p_area + 1 / (2 pi)) / 2 bounds every weight by 4 pi times the integrand. The decision
 //   depends on p and the light only, and pdf() repeats it.
 // * dome: piecewise-constant sampling of the map's cells ("Dome importance sampling";
-//   glsl/shared/dome_map.glsl) with the marginal/conditional CDFs of GpuDomeSampling (searched
+//   glsl/lights/dome_map.glsl) with the marginal/conditional CDFs of GpuDomeSampling (searched
 //   from guide tables), then a uniform position inside the cell:
 //   pdf = P(row) P(cell | row) W H / (dω / du dv), 2 pi^2 sin(theta) for lat-long maps, 4 pi for
 //   the equal-area square. Probabilities are differences of the stored float CDFs, which is
@@ -63,10 +63,10 @@
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
-#include "layout.glsl"
-#include "features.glsl"
-#include "common.glsl"
-#include "dome_map.glsl"
+#include "shared/layout.glsl"
+#include "scene/features.glsl"
+#include "shared/common.glsl"
+#include "lights/dome_map.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeCdfRef { float v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeGuideRef { uvec2 v[]; };

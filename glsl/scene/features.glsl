@@ -5,7 +5,7 @@
 #ifndef ILLUM_FEATURES_GLSL
 #define ILLUM_FEATURES_GLSL
 
-#include "layout.glsl"
+#include "shared/layout.glsl"
 
 layout(constant_id = SPEC_FEATURES) const uint FEATURES = 0xffffffffu;
 bool has_feature(uint f) { return (FEATURES & f) != 0u; }
