@@ -130,3 +130,51 @@ pub fn compile(
         .map(|a| a.as_binary().to_vec())
         .map_err(|e| format!("{e}"))
 }
+
+/// Compiles every piece (the `*.glsl` among `sources`) as a kernel of its own, then all of them in
+/// one kernel in sorted order and again in reverse order, in each trace variant: so each piece
+/// includes what it uses, and none depends on what was included before it. Panics (failing the
+/// build) with every compiler message.
+pub fn check_pieces(glsl: &Path, sources: &[PathBuf]) {
+    let compiler = shaderc::Compiler::new().expect("shaderc: cannot create a compiler");
+    let mut pieces: Vec<String> = sources
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "glsl"))
+        .map(|p| {
+            let rel = p.strip_prefix(glsl).unwrap_or(p);
+            rel.components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect::<Vec<_>>()
+                .join("/")
+        })
+        .collect();
+    pieces.sort();
+    let kernel = |includes: &mut dyn Iterator<Item = &String>| {
+        let mut text = String::from("#version 460\n");
+        for name in includes {
+            writeln!(text, "#include \"{name}\"").unwrap();
+        }
+        text.push_str("layout(local_size_x = 1) in;\nvoid main() {}\n");
+        text
+    };
+    let mut cases: Vec<(String, String)> = pieces
+        .iter()
+        .map(|name| (name.clone(), kernel(&mut std::iter::once(name))))
+        .collect();
+    cases.push(("every piece".into(), kernel(&mut pieces.iter())));
+    cases.push(("every piece, reversed".into(), kernel(&mut pieces.iter().rev())));
+    let mut failures = Vec::new();
+    for (variant, defines) in VARIANT_DEFINES.iter().filter(|(n, _)| *n != "plain") {
+        for (what, text) in &cases {
+            let name = glsl.join(format!("{what} alone ({variant})"));
+            if let Err(e) = compile(&compiler, glsl, &name, text, defines) {
+                failures.push(e);
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "GLSL pieces that do not compile on their own:\n{}",
+        failures.join("\n")
+    );
+}

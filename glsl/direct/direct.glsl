@@ -33,117 +33,20 @@
 #ifndef ILLUM_DIRECT_GLSL
 #define ILLUM_DIRECT_GLSL
 
-#include "scene/surface.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/features.glsl"
+#include "scene/scene.glsl"
+#include "scene/shading.glsl"
 #include "scene/microfacet.glsl"
 #include "lights/light_sampling.glsl"
-#include "direct/mis.glsl"
+#include "lights/lights.glsl"
+#include "lights/light_bvh.glsl"
 #include "lights/light_tree.glsl"
-#include "lights/irradiance.glsl"
-
-#define DIRECT_MAX_CROSSED 16u
-#define LIGHT_BVH_STACK 32u
-
-layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer LightNodeRef { GpuLightNode v[]; };
-layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer LightRefRef { uint v[]; };
-
-bool ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi) {
-    vec3 t0 = (lo - o) * inv_d, t1 = (hi - o) * inv_d;
-    vec3 tn = min(t0, t1), tf = max(t0, t1);
-    float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
-    float leave = min(min(tf.x, tf.y), tf.z);
-    return enter <= leave * 1.00001;
-}
-
-// The lights whose bounds the ray from p along w crosses (candidates for light_hit), then the
-// infinite lights. Returns the count written to `ids`.
-uint lights_along(vec3 p, vec3 w, out uint ids[DIRECT_MAX_CROSSED]) {
-    uint n = 0u;
-    LightRefRef refs = LightRefRef(frame.light_refs);
-    if (frame.light_bvh_nodes > 0u) {
-        LightNodeRef nodes = LightNodeRef(frame.light_nodes);
-        vec3 inv_d = 1.0 / w;
-        uint stack[LIGHT_BVH_STACK];
-        uint sp = 0u;
-        stack[sp++] = 0u;
-        while (sp > 0u && n < DIRECT_MAX_CROSSED) {
-            GpuLightNode node = nodes.v[stack[--sp]];
-            if (!ray_box(p, inv_d, node.lo, node.hi)) continue;
-            if (node.count == 0u) {
-                if (sp + 2u <= LIGHT_BVH_STACK) {
-                    stack[sp++] = node.index;
-                    stack[sp++] = node.index + 1u;
-                }
-            } else {
-                for (uint k = 0u; k < node.count && n < DIRECT_MAX_CROSSED; ++k) ids[n++] = refs.v[node.index + k];
-            }
-        }
-    }
-    for (uint k = 0u; k < frame.infinite_count && n < DIRECT_MAX_CROSSED; ++k) ids[n++] = refs.v[frame.infinite_first + k];
-    return n;
-}
-
-layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeSamplingRef { GpuDomeSampling v; };
-
-// Share of a textured dome's samples drawn uniformly over the sphere under control variates
-// (light_sampling.glsl: its SH9 control needs a pdf > 0 everywhere; docs/control-variates.md).
-const float DOME_CV_DEFENSIVE = 0.1;
-
-GpuDomeSampling dome_sampling() {
-    GpuDomeSampling d;
-    d.marginal = 0ul; d.conditional = 0ul; d.width = 0u; d.height = 0u; d.integral = 0.0; d.defensive = 0.0;
-    for (int k = 0; k < 9; ++k) d.sh[k] = vec4(0.0);
-    if (has_feature(FEATURE_DOME) && frame.dome_sampling != 0ul) {
-        d = DomeSamplingRef(frame.dome_sampling).v;
-        if (has_feature(FEATURE_CONTROL_VARIATES)) d.defensive = DOME_CV_DEFENSIVE;
-    }
-    return d;
-}
-
-// Texture coordinates of a point of a triangle light, from its barycentrics (b1, b2) and the
-// mesh's vertex uvs, as surface_at interpolates them for camera rays (so that an emissive mesh
-// looks the same seen directly and as a light).
-vec2 triangle_light_texcoord(GpuLight l, vec2 bc) {
-    if (!has_feature(FEATURE_MESHES)) return vec2(0.0);
-    GpuInstance inst = get_instance(l.shape);
-    if ((inst.flags & INSTANCE_FLAG_UVS) == 0u) return vec2(0.0);
-    GpuVertex v0, v1, v2;
-    instance_triangle(inst, l.triangle, v0, v1, v2);
-    return (1.0 - bc.x - bc.y) * vec2(v0.u, v0.v) + bc.x * vec2(v1.u, v1.v) + bc.y * vec2(v2.u, v2.v);
-}
-
-// Emitted radiance of light l toward the shading point, at light-surface coordinates uv.
-vec3 light_radiance(GpuLight l, vec2 uv, bool delta) {
-    if (l.kind == LIGHT_SUN) {
-        // The sun's E_perp spread over its cone: L = E / (pi sin^2 theta_s); a delta sun gives E.
-        if (delta) return l.radiance;
-        float om = l.p1.x;
-        return l.radiance / (PI * om * (2.0 - om));
-    }
-    if (l.kind == LIGHT_DOME) return l.radiance * dome_texture(l, uv).rgb;
-    if (l.kind == LIGHT_TRIANGLE) {
-        if (l.texture == NONE) return l.radiance;
-        uv = triangle_light_texcoord(l, uv);
-    }
-    return l.radiance * texture_lookup(l.texture, uv).rgb;
-}
-
-// Share of the hemisphere's solid angle a light covers from p (an estimate for sample counts and
-// light selection: any positive function is unbiased).
-float light_share(GpuLight l, vec3 p) {
-    if (l.kind == LIGHT_DOME) return 1.0;
-    if (l.kind == LIGHT_SUN) return max(l.p1.x, 1e-6);
-    if (l.kind == LIGHT_SPHERE) {
-        vec3 d = l.p0.xyz - p;
-        float d2 = dot(d, d), r2 = l.p0.w * l.p0.w;
-        if (d2 <= r2) return 1.0;
-        float s2 = r2 / d2;
-        return s2 / (1.0 + sqrt(max(0.0, 1.0 - s2)));   // 1 - cos(theta_max), stable
-    }
-    vec3 c = l.kind == LIGHT_TRIANGLE ? l.p0.xyz + (l.p1.xyz + l.p2.xyz) / 3.0 : l.p0.xyz;
-    vec3 d = c - p;
-    float d2 = max(dot(d, d), 1e-30);
-    return min(l.area / (2.0 * PI * d2), 1.0);
-}
+#include "lights/light_select.glsl"
+#include "direct/mis.glsl"
+#include "direct/shadow.glsl"
+#include "direct/control_variates.glsl"
 
 uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     // A textured dome (a sky with its sun) varies far more over its directions than any other
@@ -153,28 +56,6 @@ uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     if (l.kind == LIGHT_DOME && l.texture != NONE) return 8u * n_max;
     return clamp(uint(ceil(light_share(l, p) * float(n_max))), 1u, n_max);
 }
-
-// Selection weight of a light at p (many-light mode): luminance x share, with a floor on the
-// cosine factor so that every light that may contribute keeps a positive probability.
-float light_importance(GpuLight l, vec3 p, vec3 n) {
-    float lum = luminance(l.radiance);
-    if (l.kind == LIGHT_DOME || l.kind == LIGHT_SUN) return lum * (l.kind == LIGHT_SUN ? 1.0 : 2.0 * PI);
-    vec3 c = l.kind == LIGHT_TRIANGLE ? l.p0.xyz + (l.p1.xyz + l.p2.xyz) / 3.0 : l.p0.xyz;
-    vec3 d = c - p;
-    float len = length(d);
-    float cosc = len > 0.0 ? dot(n, d / len) : 1.0;
-    return lum * light_share(l, p) * (0.1 + max(cosc, 0.0)) + 1e-20;
-}
-
-struct Shading {
-    vec3 p;        // shading point
-    vec3 origin;   // offset ray origin (Waechter & Binder) on the viewer's side
-    vec3 ng;       // geometric normal, on the viewer's side
-    vec3 n, t, b;  // shading frame, n on the viewer's side
-    vec3 v;        // toward the viewer
-    vec3 albedo;   // Lambert rho
-    uint self_light;   // the light whose surface p lies on (emissive shapes), else NONE
-};
 
 // Light i as seen from the shading point: flagged LIGHT_FLAG_SELF when p lies on its surface.
 GpuLight light_seen_from(Shading sh, uint i) {
@@ -206,76 +87,6 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
         sum += e.f_cos * w;
     }
     return sum;
-}
-
-#include "direct/shadow.glsl"
-
-// The estimator and its conditions: docs/techniques.md, "Control variates".
-// Control variates (FEATURE_CONTROL_VARIATES): for a looped light, the N light
-// samples' diffuse terms g_j = (rho/pi) Lc(w_j) max(0, n.w_j) / (pdf_j N), with Lc a control
-// radiance (zero where eval_lobes gives zero: below n's or ng's horizon), have the analytic
-// unshadowed sum G = (rho/pi) control_irradiance() = E[sum_j g_j], exactly when ns = ng (a shading
-// normal that differs from ng zeroes samples that G counts) and the pdf is > 0 wherever
-// Lc max(0, n.w) is not 0. Lc is constant except on a textured dome: its SH9 projection L_SH,
-// G from the SH9 irradiance formula; its sampler then mixes in a uniform share (dome_sampling()). With V_j the shadow rays' answers:
-//   avgvis (the course):  sum_j s_j V_j + a (G - sum_j g_j),  a = visible / traced:
-//     biased (-Cov(a, sum_j g_j)), consistent; zero variance where fully lit and s_j = g_j.
-//   loo (leave one out):  sum_j [s_j V_j + a_j (G/N - g_j)],  a_j = a without sample j:
-//     a_j is independent of sample j, so E[a_j (G/N - g_j)] = E[a_j] * 0: unbiased.
-// s_j is the sample's own contribution, with the light's true radiance: for an untextured light
-// Lc is that radiance (s_j = g_j on the diffuse part); a textured light uses its mean radiance
-// Lc = GpuLight.mean (condition 2: any constant control is exact, the mean is the one that cancels
-// most of the variance). A sample is "traced" when max(0, n.w_j) / pdf_j > 0 (whatever Lc);
-// a_j = 0 when no other sample was traced; other samples count in N and take a_j = a. Below, the
-// sums are RGB in units of rho / pi: sv, so = sum of Lc(w_j) max(0, n.w_j) / (pdf_j N) over the
-// visible / occluded traced samples (each an estimate of E), vis and tr the counts. The specular
-// terms are left as they are.
-// Kinds: rect, disk, sphere, triangle (Lambert's polygon formula) and sun (the cap formula with
-// sin^2 sigma = sin^2 theta_s; delta sun: E_perp max(0, n.s), where g_j = G and the control adds
-// nothing) and the dome (SH9; constant: G = pi L). Not covered: lights picked from the tree or
-// the scan (one sample per pick; see docs/control-variates.md).
-bool control_variate_applies(Shading sh, GpuLight l, uint technique, bool diffuse_mis) {
-    if (light_self(l) || (l.kind == LIGHT_DOME && !has_feature(FEATURE_DOME))) return false;
-    if (technique == TECHNIQUE_BRDF || (technique == TECHNIQUE_MIS && diffuse_mis)) return false;
-    return max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0;
-}
-
-// The control radiance Lc toward w (see above): the radiance light_radiance() gives everywhere on
-// an untextured light, the host's exact mean of it on a textured one, L_SH(w) on a textured dome.
-vec3 control_radiance(GpuLight l, GpuDomeSampling dome, vec3 w) {
-    if (l.kind == LIGHT_SUN) return light_radiance(l, vec2(0.0), l.p1.x <= 0.0);
-    if (light_is(l, LIGHT_DOME) && dome.width > 0u) return sh9_eval(dome.sh, w);
-    return l.texture == NONE ? l.radiance : l.mean;
-}
-
-// E, the integral of Lc max(0, n.w) over the light as its sampler covers it.
-vec3 control_irradiance(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 n) {
-    if (light_is(l, LIGHT_DOME))
-        return dome.width > 0u ? sh9_irradiance(dome.sh, n) : PI * l.radiance;
-    vec3 lc = control_radiance(l, dome, vec3(0.0));
-    if (l.kind == LIGHT_SUN && l.p1.x > 0.0) {
-        float om = l.p1.x;
-        return lc * irradiance_cap(dot(n, l.p0.xyz), om * (2.0 - om), 1.0 - om);
-    }
-    return lc * light_irradiance(l, p, n);
-}
-
-vec3 control_variate(Shading sh, GpuLight l, GpuDomeSampling dome, float n, vec3 sv, vec3 so, float vis, float tr) {
-    vec3 g = control_irradiance(l, dome, sh.p, sh.n);   // the expectation of sv + so unshadowed
-    float a = tr > 0.0 ? vis / tr : 0.0;
-    vec3 k;
-    if (frame.control_variates == CONTROL_VARIATES_LOO) {
-        // sum_j a_j (G/N - g_j): untraced samples a G/N; visible ones (vis-1)/(tr-1) (G/N - g_j);
-        // occluded ones vis/(tr-1) (G/N - g_j).
-        k = (n - tr) * a * g / n;
-        if (tr > 1.0) {
-            k += (vis - 1.0) / (tr - 1.0) * (vis * g / n - sv);
-            k += vis / (tr - 1.0) * ((tr - vis) * g / n - so);
-        }
-    } else {
-        k = a * (g - sv - so);
-    }
-    return sh.albedo * k * INV_PI;
 }
 
 // Sample i of a group of n: u jittered within cell i of an nx x ny grid over [0, 1)^2. The cells
@@ -443,7 +254,7 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 uint li = g;
                 bool picked = many && g >= looped;
                 bool reached = true;
-                if (tree && g < looped) li = LightRefRef(frame.light_refs).v[frame.infinite_first + g];
+                if (tree && g < looped) li = infinite_light(g);
                 if (picked && tree) {
                     float pmf = light_tree_walk(frame.light_tree, sh.p, sh.n, true, 0u, rng, li);
                     reached = pmf > 0.0;
@@ -525,49 +336,6 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
         }
     }
     return result;
-}
-
-// The shading frame at a surface hit by a ray of direction d. Patches `m` where its parameters
-// vary per texel (glTF metallic-roughness).
-Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
-    Shading sh;
-    sh.p = s.p;
-    sh.v = -d;
-    sh.ng = dot(s.ng, d) > 0.0 ? -s.ng : s.ng;
-    sh.n = dot(s.ns, sh.ng) < 0.0 ? -s.ns : s.ns;
-    sh.origin = offset_ray_origin(s.p, sh.ng);
-    sh.self_light = s.light;
-    // Tangent: the surface's (mesh tangents, a sphere's pole), else the material's direction,
-    // each projected on the tangent plane; else around +Y (so that anisotropic spheres are brushed
-    // along latitudes, as with a pole of +Y); else any. The
-    // bitangent's handedness is not needed: the distributions are even in the bitangent.
-    bool directed = (m.flags & MATERIAL_FLAG_TANGENT_DIR) != 0u;
-    vec3 dir = directed ? m.tangent_dir : vec3(0.0, 1.0, 0.0);
-    vec3 t = directed ? dir - sh.n * dot(sh.n, dir) : cross(dir, sh.n);
-    if (dot(s.tangent, s.tangent) > 0.0) {
-        vec3 tn = normalize(s.tangent);
-        vec3 tm = tn - sh.n * dot(sh.n, tn);
-        if (dot(tm, tm) > 1e-8) t = tm;
-    }
-    if (dot(t, t) < 1e-8) {
-        vec3 b;
-        make_basis(sh.n, t, b);
-    }
-    sh.t = normalize(t);
-    sh.b = cross(sh.n, sh.t);
-    vec3 tex = texture_lookup(m.diffuse_texture, s.uv).rgb;
-    sh.albedo = m.diffuse * tex;
-    if ((m.flags & MATERIAL_FLAG_METALLIC_ROUGHNESS) != 0u && m.lobe_count > 0u) {
-        // glTF: metallic in B, roughness in G of the metallic-roughness texture.
-        vec4 mr = texture_lookup(m.metallic_roughness_texture, s.uv);
-        vec3 base = m.base_metallic.rgb * tex;
-        float metallic = clamp(m.base_metallic.w * mr.b, 0.0, 1.0);
-        float roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
-        sh.albedo = base * (1.0 - metallic);
-        m.lobes[0].fresnel0.rgb = mix(vec3(0.04), base, metallic);
-        m.lobes[0].alpha = vec2(max(roughness * roughness, 1e-4));
-    }
-    return sh;
 }
 
 #endif

@@ -2,6 +2,10 @@
 // Camera rays with a box pixel filter: the AOVs (albedo, normal, depth, emission) and the beauty,
 // emission seen directly plus direct lighting at the first hit (glsl/direct/direct.glsl).
 #version 460
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "trace/trace.glsl"
+#include "direct/direct.glsl"
 #include "film/film.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;

@@ -6,9 +6,15 @@
 // traversal for LLVM to compile (about a second of CPU each on a cold cache). direct_lighting()
 // makes at most one ray per iteration of its loop (a light sample, one light a BRDF sample
 // crosses, one pick of a resampling flush) and traces it at one place: one traversal copy.
-// Needs the Shading struct (direct.glsl).
 #ifndef ILLUM_SHADOW_GLSL
 #define ILLUM_SHADOW_GLSL
+
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/features.glsl"
+#include "scene/scene.glsl"
+#include "scene/shading.glsl"
+#include "trace/trace.glsl"
 
 // Rays traced by this invocation (for the rays-per-second figures).
 uint g_rays = 0u;

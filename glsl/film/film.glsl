@@ -5,7 +5,13 @@
 #ifndef ILLUM_FILM_GLSL
 #define ILLUM_FILM_GLSL
 
-#include "direct/direct.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/scene.glsl"
+#include "scene/surface.glsl"
+#include "scene/shading.glsl"
+#include "trace/hit.glsl"
+#include "lights/lights.glsl"
 
 // Direction of the camera ray through film position film_uv in [0,1]^2.
 vec3 camera_direction(vec2 film_uv) {

@@ -25,6 +25,11 @@
 // its cell's keys at the cone width the render's lookups there will have. The host averages the
 // records into the next generation's table.
 #version 460
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "trace/trace.glsl"
+#include "direct/direct.glsl"
 #include "indirect/indirect.glsl"
 #include "film/film.glsl"
 

@@ -8,6 +8,11 @@
 // at the camera hit), IndirectDiffuse and Reflection (paths whose first bounce took the diffuse
 // or a specular lobe).
 #version 460
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "trace/trace.glsl"
+#include "direct/direct.glsl"
 #include "indirect/indirect.glsl"
 #include "film/film.glsl"
 

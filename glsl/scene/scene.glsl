@@ -10,8 +10,6 @@
 
 #include "shared/layout.glsl"
 #include "shared/common.glsl"
-#include "lights/dome_map.glsl"
-
 #include "scene/features.glsl"
 
 layout(scalar, binding = BINDING_FRAME) uniform FrameBlock { Frame frame; };
@@ -84,30 +82,6 @@ vec4 texture_lookup(uint tex, vec2 uv) {
     uvec2 wrap = uvec2(t.flags >> TEXTURE_WRAP_SHIFT_U, t.flags >> TEXTURE_WRAP_SHIFT_V) & 3u;
     vec2 r = vec2(reduce_coordinate(uv.x, wrap.x), reduce_coordinate(uv.y, wrap.y));
     return texture_at(t, r * vec2(t.width, t.height), (t.flags & TEXTURE_FLAG_NEAREST) != 0u, wrap);
-}
-
-// A dome's map at map coordinates uv, looked up as its convention does (glsl/lights/dome_map.glsl).
-vec4 dome_texture(GpuLight l, vec2 uv) {
-    if (!has_feature(FEATURE_TEXTURES) || l.texture == NONE) return vec4(1.0);
-    if (dome_is_pbrt(l)) {
-        GpuTexture t = get_texture(l.texture);
-        uvec2 clamped = uvec2(TEXTURE_WRAP_CLAMP);
-        return texture_at(t, clamp(uv, 0.0, 1.0) * vec2(t.width, t.height), true, clamped);
-    }
-    if (dome_is_mitsuba(l)) {
-        // Column centres at (i + 1/2) / W, rows at j / (H - 1): st.y - 1/2 = v (H - 1).
-        GpuTexture t = get_texture(l.texture);
-        vec2 st = vec2(uv.x * float(t.width), clamp(uv.y, 0.0, 1.0) * float(t.height - 1u) + 0.5);
-        return texture_at(t, st, false, uvec2(TEXTURE_WRAP_REPEAT, TEXTURE_WRAP_CLAMP));
-    }
-    return texture_lookup(l.texture, uv);
-}
-
-// What a ray that leaves the scene along dir sees of the dome.
-vec3 dome_radiance(vec3 dir) {
-    if (!has_feature(FEATURE_DOME) || frame.dome_light == NONE) return vec3(0.0);
-    GpuLight l = get_light(frame.dome_light);
-    return l.radiance * dome_texture(l, dome_uv(l, dir)).rgb;
 }
 
 #endif

@@ -3,7 +3,12 @@
 #ifndef ILLUM_SURFACE_GLSL
 #define ILLUM_SURFACE_GLSL
 
-#include "trace/trace.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/features.glsl"
+#include "scene/scene.glsl"
+#include "trace/hit.glsl"
+#include "trace/shapes.glsl"
 
 struct Surface {
     vec3 p;

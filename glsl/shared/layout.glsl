@@ -11,6 +11,8 @@
 #ifndef ILLUM_LAYOUT_GLSL
 #define ILLUM_LAYOUT_GLSL
 
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
 // Descriptor set 0.
 #define BINDING_FRAME 0
 #define BINDING_FILM 1

@@ -1,5 +1,5 @@
-// The trace interface on illum's compute BVH (TRACE_BVH; built by src/trace/bvh/). Included by
-// trace.glsl, which documents the semantics both paths share.
+// The trace interface on illum's compute BVH (TRACE_BVH; built by src/trace/bvh/): trace.glsl
+// documents the semantics both paths share. Empty in other variants.
 //
 // One loop walks both levels: a top-level leaf is a mesh instance (the ray moves into its object
 // space and a marker goes on the stack; popping the marker moves it back) or an analytic shape.
@@ -18,6 +18,18 @@
 // same iteration.
 #ifndef ILLUM_TRACE_BVH_GLSL
 #define ILLUM_TRACE_BVH_GLSL
+#if defined(TRACE_BVH)
+
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference2 : require
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/scene.glsl"
+#include "trace/hit.glsl"
+#include "trace/shapes.glsl"
 
 layout(scalar, binding = BINDING_BVH) uniform BvhBlock { BvhHeader bvh; };
 // Nodes (BvhNode), triangles (BvhTriangle, 40 bytes) and instances are read as 64-bit words, two
@@ -218,4 +230,5 @@ bool trace_occluded(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     return bvh_traverse(o, d, tmin, tmax, mask, true, h);
 }
 
+#endif
 #endif

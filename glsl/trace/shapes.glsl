@@ -2,6 +2,9 @@
 #ifndef ILLUM_SHAPES_GLSL
 #define ILLUM_SHAPES_GLSL
 
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+
 // |v| without overflow or underflow of the squares (a sphere may be 1e30 across).
 float safe_length(vec3 v) {
     float m = max(max(abs(v.x), abs(v.y)), abs(v.z));

@@ -2,6 +2,10 @@
 // The trace interface as a kernel: per ray, trace_closest's Hit and trace_occluded's answer. Host
 // side: src/trace/query.rs (tests compare the two trace paths with it; `illum bench trace` times it).
 #version 460
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
 #include "trace/trace.glsl"
 
 layout(local_size_x = 64) in;

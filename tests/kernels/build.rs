@@ -2,6 +2,7 @@
 //! own (the same code: build/kernels.rs), their includes resolved in the library's glsl/.
 
 #[path = "../../build/kernels.rs"]
+#[allow(dead_code)] // check_pieces: the library's build checks the pieces
 mod kernels;
 
 use std::env;
