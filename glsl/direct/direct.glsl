@@ -120,7 +120,8 @@ bool stratify_rows(GpuLight l, GpuDomeSampling dome) { return l.kind == LIGHT_DO
 // Light sample i of the `count` of light l (looped or picked, n_l its expected count): its
 // candidate, or with a control variate (cv) its ray and g_j (in cv_tr and the ray's s).
 void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling dome, float n_l, bool cv,
-                         uint i, uint count, uint shift, inout float cv_tr, inout Rng rng) {
+                         uint i, uint count, uint shift, inout float cv_tr, inout ShadowGroup group,
+                         inout ShadowRay ray, inout Rng rng) {
     uint technique = frame.technique;
     bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
     vec2 u = rng_next2(rng);
@@ -137,10 +138,10 @@ void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling 
         float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
         if (s > 0.0) {
             cv_tr += 1.0;
-            shadow_ray(ls.wi, ls.dist, c, s, false);
+            shadow_ray(ray, ls.wi, ls.dist, c, s, false);
         }
     } else {
-        shadow_candidate(ls.wi, ls.dist, c, rng);
+        shadow_candidate(group, ray, ls.wi, ls.dist, c, rng);
     }
 }
 
@@ -174,7 +175,7 @@ uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, uint i, uint count, i
 
 // The candidate of BRDF sample s for light `id` it crosses.
 void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, bool many, bool tree,
-                       float total_importance, inout Rng rng) {
+                       float total_importance, inout ShadowGroup group, inout ShadowRay ray, inout Rng rng) {
     uint technique = frame.technique;
     uint n_max = frame.light_samples;
     uint n_b = frame.brdf_samples;
@@ -193,7 +194,7 @@ void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, boo
         w = mis_power(float(n_b), s.pdf, n_l, lh.pdf);
     }
     vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
-    shadow_candidate(s.wi, lh.t, c, rng);
+    shadow_candidate(group, ray, s.wi, lh.t, c, rng);
 }
 
 // Samples come in groups, in this order: the light samples of each round (a looped light, or one
@@ -201,7 +202,8 @@ void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, boo
 // of each lobe (specular ones, and the diffuse lobe where it is BRDF-sampled). One loop iteration
 // makes at most one shadow ray (a light sample; a BRDF sample and the first light it crosses, or
 // the next one; a pick of a resampling flush) and traces it: the only call site (shadow.glsl).
-vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
+// `rays` counts the shadow rays traced.
+vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) {
     uint nlights = frame.light_count;
     if (nlights == 0u) return vec3(0.0);
     uint technique = frame.technique;
@@ -238,6 +240,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
     BrdfDir bdir;         // a BRDF sample's direction, and the lights it crosses still to do
     uint ids[DIRECT_MAX_CROSSED];
     uint crossed = 0u, q = 0u;
+    ShadowGroup group = shadow_group();
+    ShadowRay ray;
     while (g < groups) {
         if (!opened) {
             opened = true;
@@ -291,18 +295,18 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 }
             }
         }
-        g_ray_on = false;
-        if (g_fl_on && !shadow_flush_next()) {
-            result += g_fl_part;
-            shadow_flush_done();
+        ray.on = false;
+        if (group.flushing && !shadow_flush_next(group, ray)) {
+            result += group.part;
+            shadow_flush_done(group);
         }
-        if (!g_fl_on) {
+        if (!group.flushing) {
             // The next light a BRDF sample crosses, else the next sample, else the group's end.
             bool cross = q < crossed;
             if (!cross && j < count) {
                 j += 1u;
                 if (g < rounds) {
-                    direct_light_sample(sh, m, l, dome, n_l, cv, j - 1u, count, shift, cv_tr, rng);
+                    direct_light_sample(sh, m, l, dome, n_l, cv, j - 1u, count, shift, cv_tr, group, ray, rng);
                 } else {
                     crossed = direct_brdf_sample(sh, m, g - rounds - 1u, j - 1u, count, rng, bdir, ids);
                     q = 0u;
@@ -310,20 +314,21 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                 }
             } else if (!cross && !closed) {
                 closed = true;
-                if (close) shadow_group_end(rng);
+                if (close) shadow_group_end(group, rng);
             } else if (!cross) {
                 if (cv) result += control_variate(sh, l, dome, float(count), cv_sv, cv_so, cv_vis, cv_tr);
                 g += 1u;
                 opened = false;
             }
-            if (cross) direct_brdf_light(sh, dome, bdir, ids[q++], many, tree, total_importance, rng);
+            if (cross) direct_brdf_light(sh, dome, bdir, ids[q++], many, tree, total_importance, group, ray, rng);
         }
-        if (g_ray_on) {
+        if (ray.on) {
             // The one shadow-ray call site.
-            bool visible = shadow_visible(sh, g_ray_w, g_ray_dist);
-            if (g_ray_cv >= 0.0) {
+            rays += 1u;
+            bool visible = shadow_visible(sh, ray.w, ray.dist);
+            if (ray.cv >= 0.0) {
                 // g_j / (rho / pi): the ray came from this light round's direct_light_sample().
-                vec3 gj = g_ray_cv * control_radiance(l, dome, g_ray_w);
+                vec3 gj = ray.cv * control_radiance(l, dome, ray.w);
                 if (visible) {
                     cv_vis += 1.0;
                     cv_sv += gj;
@@ -331,8 +336,8 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng) {
                     cv_so += gj;
                 }
             }
-            if (visible && g_ray_flush) g_fl_part += g_ray_c;
-            else if (visible) result += g_ray_c;
+            if (visible && ray.flush) group.part += ray.c;
+            else if (visible) result += ray.c;
         }
     }
     return result;

@@ -20,23 +20,24 @@ void main() {
     // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
     // fixed point (src/render/film.rs), since long float32 running sums round systematically.
     FilmPixel acc = film[pixel];
+    uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     for (uint k = 0u; k < pc.sample_count; ++k) {
         uint sample_index = pc.first_sample + k;
         Rng rng;
         vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);
         vec3 o = frame.cam_origin.xyz;
         Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
-        g_rays += 1u;
+        rays += 1u;
         vec3 beauty = vec3(0.0);
         vec3 le;   // emission seen directly
         GpuMaterial m;
         Shading sh;
         if (film_camera_hit(h, o, d, acc, le, m, sh)) {
-            beauty += film_clamp(direct_lighting(sh, m, rng), acc);
+            beauty += film_clamp(direct_lighting(sh, m, rng, rays), acc);
         }
         beauty += le;
         film_add(acc, sample_index, beauty, le);
     }
-    acc.beauty_sq.w += float(g_rays);
+    acc.beauty_sq.w += float(rays);
     film[pixel] = acc;
 }

@@ -16,9 +16,6 @@
 #include "scene/shading.glsl"
 #include "trace/trace.glsl"
 
-// Rays traced by this invocation (for the rays-per-second figures).
-uint g_rays = 0u;
-
 float max_abs(vec3 v) { return max(abs(v.x), max(abs(v.y), abs(v.z))); }
 
 // Relative float32 error allowed at the end of a shadow segment: ~64 ulp of the larger end's
@@ -31,7 +28,6 @@ const float SHADOW_END_ULPS = 64.0 / 8388608.0;
 // its length plus the end's rounding (pbrt-v4's ShadowEpsilon, with an absolute term for scenes
 // far from the camera).
 bool shadow_visible(Shading sh, vec3 w, float dist) {
-    g_rays += 1u;
     vec3 dir = w;
     float tmax = INF;
     if (dist != INF) {
@@ -46,25 +42,27 @@ bool shadow_visible(Shading sh, vec3 w, float dist) {
 }
 
 // The ray of this iteration of direct_lighting()'s loop (at most one): it adds c if visible, to
-// the result or (g_ray_flush) to the running resampling flush's sum, which is added as one term
-// (as before the loop, so the arithmetic and hence the image stay the same). A control variate
-// sample (cv_s >= 0) is traced even where c is 0 and reports its answer. Scalars, not a queue:
-// a private array costs lavapipe ~17% of a direct render's time in dynamic indexing.
-bool g_ray_on = false;
-vec3 g_ray_w;
-float g_ray_dist;
-vec3 g_ray_c;
-float g_ray_cv;
-bool g_ray_flush;
+// the result or (flush) to the running resampling flush's sum, which is added as one term (as
+// before the loop, so the arithmetic and hence the image stay the same). A control variate sample
+// (cv >= 0) is traced even where c is 0 and reports its answer. Scalars, not a queue: a private
+// array costs lavapipe ~17% of a direct render's time in dynamic indexing.
+struct ShadowRay {
+    bool on;
+    vec3 w;
+    float dist;
+    vec3 c;
+    float cv;
+    bool flush;
+};
 
-void shadow_ray(vec3 w, float dist, vec3 c, float cv_s, bool flush) {
+void shadow_ray(inout ShadowRay r, vec3 w, float dist, vec3 c, float cv_s, bool flush) {
     if (cv_s < 0.0 && !(max(c.r, max(c.g, c.b)) > 0.0)) return;   // nothing to add: no ray
-    g_ray_on = true;
-    g_ray_w = w;
-    g_ray_dist = dist;
-    g_ray_c = c;
-    g_ray_cv = cv_s;
-    g_ray_flush = flush;
+    r.on = true;
+    r.w = w;
+    r.dist = dist;
+    r.c = c;
+    r.cv = cv_s;
+    r.flush = flush;
 }
 
 // Fewer shadow rays (docs/techniques.md, "Shadow resampling", "Shadow culling"). Every candidate
@@ -88,88 +86,99 @@ void shadow_ray(vec3 w, float dist, vec3 c, float cv_s, bool flush) {
 // SHADOW_GROUP_MAX candidates wait. Any grouping fixed by the candidates keeps the estimate
 // unbiased; groups only change its variance.
 #define SHADOW_GROUP_MAX 16u
-vec3 g_cand_w[SHADOW_GROUP_MAX];
-vec3 g_cand_c[SHADOW_GROUP_MAX];
-float g_cand_dist[SHADOW_GROUP_MAX];
-float g_cand_p[SHADOW_GROUP_MAX];
-uint g_cand_n = 0u;
 
-// A flush of the waiting candidates (resampled) runs over several iterations, one ray each:
-// shadow_flush_start() draws its random number, shadow_flush_next() makes the next ray (false
-// when there is none left: the caller then adds g_fl_part and calls shadow_flush_done()).
-bool g_fl_on = false;
-bool g_fl_all;       // K >= M: every candidate as is
-uint g_fl_m, g_fl_k, g_fl_i, g_fl_taken;
-float g_fl_pos, g_fl_cum, g_fl_stride;
-vec3 g_fl_part;
-// A candidate that found the group full: held once the flush is done.
-bool g_hold_on = false;
-vec3 g_hold_w, g_hold_c;
-float g_hold_dist, g_hold_p;
+// A resampling group: its waiting candidates, the flush of them under way, and a candidate that
+// found the group full, held until the flush is done. Owned by direct_lighting(), one per call.
+// A flush runs over several iterations, one ray each: shadow_flush_start() draws its random
+// number, shadow_flush_next() makes the next ray (false when there is none left: the caller then
+// adds `part` and calls shadow_flush_done()).
+struct ShadowGroup {
+    vec3 cand_w[SHADOW_GROUP_MAX];
+    vec3 cand_c[SHADOW_GROUP_MAX];
+    float cand_dist[SHADOW_GROUP_MAX];
+    float cand_p[SHADOW_GROUP_MAX];
+    uint n;              // waiting candidates
+    bool flushing;
+    bool all;            // K >= M: every candidate as is
+    uint m, k, i, taken;
+    float pos, cum, stride;
+    vec3 part;           // the flush's visible sum so far
+    bool held;
+    vec3 hold_w, hold_c;
+    float hold_dist, hold_p;
+};
 
-void shadow_flush_start(inout Rng rng) {
-    uint m = g_cand_n;
-    g_cand_n = 0u;
-    if (m == 0u) return;
-    g_fl_on = true;
-    g_fl_m = m;
-    g_fl_k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
-    g_fl_all = g_fl_k >= m;
-    g_fl_i = 0u;
-    g_fl_taken = 0u;
-    g_fl_part = vec3(0.0);
-    if (g_fl_all) return;
-    float wsum = 0.0;
-    for (uint i = 0u; i < m; ++i) wsum += g_cand_p[i];
-    g_fl_stride = wsum / float(g_fl_k);
-    g_fl_pos = rng_next(rng) * g_fl_stride;
-    g_fl_cum = 0.0;
+ShadowGroup shadow_group() {
+    ShadowGroup g;
+    g.n = 0u;
+    g.flushing = false;
+    g.held = false;
+    return g;
 }
 
-bool shadow_flush_next() {
-    if (g_fl_all) {
-        if (g_fl_i == g_fl_m) return false;
-        uint i = g_fl_i++;
-        shadow_ray(g_cand_w[i], g_cand_dist[i], g_cand_c[i], -1.0, true);
+void shadow_flush_start(inout ShadowGroup g, inout Rng rng) {
+    uint m = g.n;
+    g.n = 0u;
+    if (m == 0u) return;
+    g.flushing = true;
+    g.m = m;
+    g.k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
+    g.all = g.k >= m;
+    g.i = 0u;
+    g.taken = 0u;
+    g.part = vec3(0.0);
+    if (g.all) return;
+    float wsum = 0.0;
+    for (uint i = 0u; i < m; ++i) wsum += g.cand_p[i];
+    g.stride = wsum / float(g.k);
+    g.pos = rng_next(rng) * g.stride;
+    g.cum = 0.0;
+}
+
+bool shadow_flush_next(inout ShadowGroup g, inout ShadowRay r) {
+    if (g.all) {
+        if (g.i == g.m) return false;
+        uint i = g.i++;
+        shadow_ray(r, g.cand_w[i], g.cand_dist[i], g.cand_c[i], -1.0, true);
         return true;
     }
-    uint m = g_fl_m, k = g_fl_k;
-    while (g_fl_i < m && g_fl_taken < k) {
-        uint i = g_fl_i++;
-        g_fl_cum += g_cand_p[i];
+    uint m = g.m, k = g.k;
+    while (g.i < m && g.taken < k) {
+        uint i = g.i++;
+        g.cum += g.cand_p[i];
         uint picks = 0u;
-        while (g_fl_taken + picks < k && g_fl_pos < g_fl_cum) {
+        while (g.taken + picks < k && g.pos < g.cum) {
             picks += 1u;
-            g_fl_pos += g_fl_stride;
+            g.pos += g.stride;
         }
         // The last candidate takes the picks that rounding of the running sum left over.
-        if (i + 1u == m) picks = k - g_fl_taken;
-        g_fl_taken += picks;
+        if (i + 1u == m) picks = k - g.taken;
+        g.taken += picks;
         if (picks > 0u) {
-            shadow_ray(g_cand_w[i], g_cand_dist[i], g_cand_c[i] * (float(picks) * g_fl_stride / g_cand_p[i]), -1.0, true);
+            shadow_ray(r, g.cand_w[i], g.cand_dist[i], g.cand_c[i] * (float(picks) * g.stride / g.cand_p[i]), -1.0, true);
             return true;
         }
     }
     return false;
 }
 
-void shadow_hold(vec3 w, float dist, vec3 c, float p) {
-    g_cand_w[g_cand_n] = w;
-    g_cand_c[g_cand_n] = c;
-    g_cand_dist[g_cand_n] = dist;
-    g_cand_p[g_cand_n] = p;
-    g_cand_n += 1u;
+void shadow_hold(inout ShadowGroup g, vec3 w, float dist, vec3 c, float p) {
+    g.cand_w[g.n] = w;
+    g.cand_c[g.n] = c;
+    g.cand_dist[g.n] = dist;
+    g.cand_p[g.n] = p;
+    g.n += 1u;
 }
 
-void shadow_flush_done() {
-    g_fl_on = false;
-    if (g_hold_on) shadow_hold(g_hold_w, g_hold_dist, g_hold_c, g_hold_p);
-    g_hold_on = false;
+void shadow_flush_done(inout ShadowGroup g) {
+    g.flushing = false;
+    if (g.held) shadow_hold(g, g.hold_w, g.hold_dist, g.hold_c, g.hold_p);
+    g.held = false;
 }
 
 // One candidate of contribution c along w (light point at dist): culled, held back for
 // resampling (a full group starts a flush first), or this iteration's ray.
-void shadow_candidate(vec3 w, float dist, vec3 c, inout Rng rng) {
+void shadow_candidate(inout ShadowGroup g, inout ShadowRay r, vec3 w, float dist, vec3 c, inout Rng rng) {
     if (!(max(c.r, max(c.g, c.b)) > 0.0)) return;
     float p = luminance(c);
     if (has_feature(FEATURE_SHADOW_CULL) && p > 0.0 && p < frame.shadow_cull) {
@@ -179,24 +188,24 @@ void shadow_candidate(vec3 w, float dist, vec3 c, inout Rng rng) {
         p /= q;
     }
     if (has_feature(FEATURE_SHADOW_RESAMPLE) && p > 0.0) {
-        if (g_cand_n == SHADOW_GROUP_MAX) {
-            shadow_flush_start(rng);
-            g_hold_on = true;
-            g_hold_w = w;
-            g_hold_c = c;
-            g_hold_dist = dist;
-            g_hold_p = p;
+        if (g.n == SHADOW_GROUP_MAX) {
+            shadow_flush_start(g, rng);
+            g.held = true;
+            g.hold_w = w;
+            g.hold_c = c;
+            g.hold_dist = dist;
+            g.hold_p = p;
         } else {
-            shadow_hold(w, dist, c, p);
+            shadow_hold(g, w, dist, c, p);
         }
         return;
     }
-    shadow_ray(w, dist, c, -1.0, false);
+    shadow_ray(r, w, dist, c, -1.0, false);
 }
 
 // Closes a resampling group (nothing without FEATURE_SHADOW_RESAMPLE).
-void shadow_group_end(inout Rng rng) {
-    if (has_feature(FEATURE_SHADOW_RESAMPLE)) shadow_flush_start(rng);
+void shadow_group_end(inout ShadowGroup g, inout Rng rng) {
+    if (has_feature(FEATURE_SHADOW_RESAMPLE)) shadow_flush_start(g, rng);
 }
 
 #endif
