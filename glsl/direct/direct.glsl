@@ -10,9 +10,10 @@
 //   textured dome takes 8 N_max (measured at equal time, light_count_for). Above
 //   DIRECT_LOOP_LIGHTS lights (FEATURE_MANY_LIGHTS), the infinite lights are still looped over that
 //   way and N_max samples are spread over the finite lights, each picking a light by descending the
-//   light tree (light_tree.glsl): light l then has the expected count n_l = N_max P(l | p, n) in
-//   every MIS weight, P replayed from l's trail for BRDF samples. LIGHT_SELECT_SCAN keeps the former
-//   pick (a linear CDF scan over all lights, infinite ones included) for comparison.
+//   light tree (select_light(), lights/light_select.glsl): light l then has the expected count
+//   n_l = N_max P(l | p, n) in every MIS weight, light_pmf() replaying P from l's trail for BRDF
+//   samples. LIGHT_SELECT_SCAN keeps the former pick (a linear CDF scan over all lights, infinite
+//   ones included) for comparison.
 // * BRDF samples: N_B per specular lobe, drawn once and shared by all lights (N_B counts every
 //   sample, also those that miss all lights or fall below the horizon). The diffuse lobe takes N_B
 //   cosine samples under TECHNIQUE_BRDF, or under MIS with INTEGRATOR_DIFFUSE_MIS; otherwise light
@@ -174,8 +175,8 @@ uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, uint i, uint count, i
 }
 
 // The candidate of BRDF sample s for light `id` it crosses.
-void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, bool many, bool tree,
-                       float total_importance, inout ShadowGroup group, inout ShadowRay ray, inout Rng rng) {
+void direct_brdf_light(Shading sh, GpuDomeSampling dome, LightSelection sel, BrdfDir s, uint id,
+                       inout ShadowGroup group, inout ShadowRay ray, inout Rng rng) {
     uint technique = frame.technique;
     uint n_max = frame.light_samples;
     uint n_b = frame.brdf_samples;
@@ -185,12 +186,9 @@ void direct_brdf_light(Shading sh, GpuDomeSampling dome, BrdfDir s, uint id, boo
     if (!(lh.pdf > 0.0)) return;
     float w = 1.0;
     if (technique == TECHNIQUE_MIS && !s.delta) {
-        bool infinite = l.kind == LIGHT_DOME || l.kind == LIGHT_SUN;
-        float n_l = !many || (tree && infinite)
-            ? float(light_count_for(l, sh.p, n_max))
-            : tree
-            ? float(n_max) * light_tree_pmf(frame.light_tree, frame.light_trails, sh.p, sh.n, id)
-            : float(n_max) * light_importance(l, sh.p, sh.n) / total_importance;
+        float n_l = light_picked(sel, l)
+            ? light_pmf(sel, sh.p, sh.n, float(n_max), id, l)
+            : float(light_count_for(l, sh.p, n_max));
         w = mis_power(float(n_b), s.pdf, n_l, lh.pdf);
     }
     vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
@@ -211,18 +209,12 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
     uint n_b = frame.brdf_samples;
     bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
     GpuDomeSampling dome = dome_sampling();
-    uint select = has_feature(FEATURE_MANY_LIGHTS) ? frame.light_select : LIGHT_SELECT_LOOP;
-    bool many = nlights > DIRECT_LOOP_LIGHTS && select != LIGHT_SELECT_LOOP;
-    bool tree = many && select == LIGHT_SELECT_TREE;
-    float total_importance = 0.0;
-    if (many && !tree) {
-        for (uint i = 0u; i < nlights; ++i) total_importance += light_importance(get_light(i), sh.p, sh.n);
-    }
+    LightSelection sel = light_selection(sh.p, sh.n);
     vec3 result = vec3(0.0);
 
-    // The tree: first a loop over the infinite lights, then n_max picks from the tree.
-    uint looped = tree ? frame.infinite_count : 0u;
-    uint rounds = technique == TECHNIQUE_BRDF ? 0u : many ? looped + n_max : nlights;
+    // The looped lights, then n_max picks (light_select.glsl).
+    uint looped = looped_lights(sel);
+    uint rounds = technique == TECHNIQUE_BRDF ? 0u : looped + (lights_picked(sel) ? n_max : 0u);
     uint lobes = min(m.lobe_count, 2u);
     bool diffuse_brdf = technique == TECHNIQUE_BRDF || diffuse_mis;
     uint groups = rounds + 1u + (technique == TECHNIQUE_LIGHT ? 0u : lobes + 1u);
@@ -255,24 +247,11 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
             closed = false;
             crossed = q = 0u;
             if (g < rounds) {
-                uint li = g;
-                bool picked = many && g >= looped;
+                uint li;
+                bool picked = g >= looped;
                 bool reached = true;
-                if (tree && g < looped) li = infinite_light(g);
-                if (picked && tree) {
-                    float pmf = light_tree_walk(frame.light_tree, sh.p, sh.n, true, 0u, rng, li);
-                    reached = pmf > 0.0;
-                    n_l = float(n_max) * pmf;
-                } else if (picked) {
-                    // Pick one light by importance (inverse CDF over the lights).
-                    float u = rng_next(rng) * total_importance, acc = 0.0;
-                    li = nlights - 1u;
-                    for (uint i = 0u; i < nlights; ++i) {
-                        acc += light_importance(get_light(i), sh.p, sh.n);
-                        if (u < acc) { li = i; break; }
-                    }
-                    n_l = float(n_max) * light_importance(get_light(li), sh.p, sh.n) / total_importance;
-                }
+                if (picked) reached = select_light(sel, sh.p, sh.n, float(n_max), rng, li, n_l);
+                else li = looped_light(sel, g);
                 if (reached) {
                     l = light_seen_from(sh, li);
                     reached = light_reaches(l);
@@ -320,7 +299,7 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
                 g += 1u;
                 opened = false;
             }
-            if (cross) direct_brdf_light(sh, dome, bdir, ids[q++], many, tree, total_importance, group, ray, rng);
+            if (cross) direct_brdf_light(sh, dome, sel, bdir, ids[q++], group, ray, rng);
         }
         if (ray.on) {
             // The one shadow-ray call site.
