@@ -10,7 +10,8 @@ pub mod layout;
 pub mod output;
 pub mod scene;
 
-/// SPIR-V of every kernel variant, compiled by build.rs (`<KERNEL>_<VARIANT>: &[u8]`).
+/// SPIR-V of every kernel variant, compiled by build.rs (`<KERNEL>_<VARIANT>: &[u8]`); the test
+/// kernels are the `illum-test-kernels` crate's (tests/kernels/).
 pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }

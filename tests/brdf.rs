@@ -1,4 +1,4 @@
-//! glsl/shared/microfacet.glsl on the GPU (glsl/tests/sample_brdf.comp): chi-square tests of every
+//! glsl/scene/microfacet.glsl on the GPU (tests/kernels/sample_brdf.comp): chi-square tests of every
 //! sampler against its own pdf, the D-BRDF's weight = F identity, directional albedos against
 //! quadrature references (and the tables of docs/techniques.md, "Reference values"), Fresnel, the
 //! delta lobe and invalid input.
@@ -164,7 +164,7 @@ fn chi2_case(k: &Kernel, name: &str, lobe: GpuLobe, theta_deg: f64, seed: u32) {
 
 fn chi2_cases(cases: &[(&str, GpuLobe)]) {
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let mut seed = 1;
     for (name, lobe) in cases {
         for theta in [0.0, 45.0, 80.0] {
@@ -217,7 +217,7 @@ fn chi2_ggx() {
 #[test]
 fn dbrdf_weight_is_exactly_fresnel() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let f0 = [0.04f32, 0.5, 0.9];
     for (a, theta) in [((0.3, 0.3), 45.0), ((1.0, 1.0), 80.0), ((0.05, 0.4), 70.0)] {
         let s = setup(theta);
@@ -288,7 +288,7 @@ fn conductor_reference(c: f64, eta: f64, k: f64) -> f64 {
 #[test]
 fn fresnel_terms() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let cosines: Vec<[f32; 4]> = (0..=40).map(|i| [i as f32 / 40.0, 0.0, 0.0, 0.0]).collect();
     let s = setup(0.0);
     // Gold at 650, 550, 450 nm (eta, k), aluminium-like, and a dielectric-like k = 0.
@@ -346,7 +346,7 @@ fn fresnel_terms() {
 #[test]
 fn delta_lobe_and_invalid_views() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let s = setup(40.0);
     // Roughness 0 along both axes (uploaded as 0): a perfect mirror.
     let l = lobe(DIST_DBRDF, (0.0, 0.0), FRESNEL_SCHLICK, [0.04, 0.04, 0.04]);
@@ -591,7 +591,7 @@ fn dbrdf_albedo_matches_quadrature_and_the_course_table() {
         (1.0, [0.631, 0.605, 0.547, 0.514]),
     ];
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let mut seed = 100;
     for (alpha, row) in table {
         for (theta, tab) in ANGLES.iter().zip(row) {
@@ -648,7 +648,7 @@ fn beckmann_smith_albedo_matches_quadrature_and_the_table() {
         (1.0, [0.462, 0.649, 0.820, 0.904]),
     ];
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let mut seed = 200;
     for (alpha, row) in table {
         for (theta, tab) in ANGLES.iter().zip(row) {
@@ -702,7 +702,7 @@ fn beckmann_smith_albedo_matches_quadrature_and_the_table() {
 #[test]
 fn ggx_albedo_matches_quadrature() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let mut seed = 300;
     for (dist, smith) in [
         (DIST_GGX_SMITH, Smith::GgxCorrelated),
@@ -729,7 +729,7 @@ fn ggx_albedo_matches_quadrature() {
 #[test]
 fn albedo_never_exceeds_one() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "sample_brdf", illum::shaders::SAMPLE_BRDF_PLAIN);
+    let k = Kernel::new(&ctx, "sample_brdf", illum_test_kernels::SAMPLE_BRDF_PLAIN);
     let mut seed = 400;
     for dist in [
         DIST_DBRDF,

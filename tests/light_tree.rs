@@ -1,4 +1,4 @@
-//! The light tree on the GPU (glsl/shared/light_tree.glsl through glsl/tests/light_tree_check.comp)
+//! The light tree on the GPU (glsl/lights/light_tree.glsl through tests/kernels/light_tree_check.comp)
 //! against the float64 twin of its PMF on the host (src/gpu_scene/light_tree.rs): the sampled
 //! probability equals the one replayed from the light's trail bit for bit and the host's to float
 //! rounding, the PMFs sum to one less the no-light share, and the frequencies of 2^20 draws at
@@ -97,7 +97,7 @@ fn setup(n: usize, seed: u64) -> Setup {
     let kernel = Kernel::new(
         &ctx,
         "light_tree_check",
-        illum::shaders::LIGHT_TREE_CHECK_PLAIN,
+        illum_test_kernels::LIGHT_TREE_CHECK_PLAIN,
     );
     Setup {
         ctx,

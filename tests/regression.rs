@@ -23,12 +23,12 @@ const SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 
 /// (00ad028ea8b00ef7 everywhere). Kernels built without spirv-opt (build.rs)
 /// give the driver other IR, whose code rounds a few results differently: beauty RMSE 9.5e-9 of
 /// a mean of 0.98 (relMSE 4e-16, against the estimate's 1e-2), one new hash on every driver.
-/// Stratified light and BRDF samples (glsl/shared/direct.glsl `stratify`) draw other
+/// Stratified light and BRDF samples (glsl/direct/direct.glsl `stratify`) draw other
 /// sample positions from the same random numbers: one new hash on every driver again. Camera
 /// samples then drew scrambled Sobol points instead of PCG numbers (glsl/shared/common.glsl
 /// `rng_init_camera`): another. Ray/sphere from the host's double-precision distance of
 /// the origin to the surface, the hit moved onto the sphere by that distance, and hit distances
-/// summed in a unit of 2^-24 (huge spheres, glsl/shared/shapes.glsl): another.
+/// summed in a unit of 2^-24 (huge spheres, glsl/trace/shapes.glsl): another.
 const KNOWN: &[(&str, &str, &str)] = &[
     ("Mesa 25.", "bvh", "015c1977b8982f71"),
     ("Mesa 25.", "rayquery", "015c1977b8982f71"),

@@ -297,7 +297,7 @@ fn exr_has_the_aov_layers_and_metadata() {
     std::fs::remove_file(&path).ok();
 }
 
-/// Iterations glsl/loop_probe.comp counts in a nest of `outer` × `inner` loops (a direct
+/// Iterations glsl/render/loop_probe.comp counts in a nest of `outer` × `inner` loops (a direct
 /// measurement, with other loop shapes than the probe's 2 × 40000).
 fn loop_count(ctx: &illum::vk::Context, outer: u32, inner: u32) -> u32 {
     use ash::vk;

@@ -1,6 +1,6 @@
 //! Dome sampling: the tables of every map convention (src/gpu_scene/dome.rs) against independent
-//! f64 weights and chi-square tests of the GPU sampler (glsl/shared/light_sampling.glsl through
-//! glsl/tests/sample_light.comp; the harness is tests/common/lights.rs), and the table builder's
+//! f64 weights and chi-square tests of the GPU sampler (glsl/lights/light_sampling.glsl through
+//! tests/kernels/sample_light.comp; the harness is tests/common/lights.rs), and the table builder's
 //! edge cases.
 
 mod common;
@@ -78,7 +78,7 @@ fn dome_case(
         light: l,
         p: [0.0; 4],
     };
-    // The uniform share that control variates mix in (glsl/shared/light_sampling.glsl).
+    // The uniform share that control variates mix in (glsl/lights/light_sampling.glsl).
     prm.dome.defensive = defensive;
     let a = f64::from(defensive);
     let (w, h) = (tex.width, tex.height);

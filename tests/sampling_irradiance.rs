@@ -1,8 +1,8 @@
-//! Analytic unshadowed irradiance of the lights (glsl/shared/irradiance.glsl through
-//! glsl/tests/irradiance_check.comp, the control variates' closed forms) against float64
+//! Analytic unshadowed irradiance of the lights (glsl/lights/irradiance.glsl through
+//! tests/kernels/irradiance_check.comp, the control variates' closed forms) against float64
 //! references validated by Monte Carlo (z-tests) and the values of docs/techniques.md; and the
 //! accurate inverse trigonometry of glsl/shared/common.glsl that those formulas and the light
-//! samplers use (glsl/tests/trig_check.comp).
+//! samplers use (tests/kernels/trig_check.comp).
 
 mod common;
 
@@ -117,7 +117,7 @@ fn irradiance_matches_references() {
     let k = Kernel::new(
         &ctx,
         "irradiance_check",
-        illum::shaders::IRRADIANCE_CHECK_PLAIN,
+        illum_test_kernels::IRRADIANCE_CHECK_PLAIN,
     );
     let z = DVec3::Z;
     let o = DVec3::ZERO;
@@ -427,7 +427,7 @@ fn irradiance_matches_references() {
 #[test]
 fn inverse_trigonometry_is_accurate() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "trig_check", illum::shaders::TRIG_CHECK_PLAIN);
+    let k = Kernel::new(&ctx, "trig_check", illum_test_kernels::TRIG_CHECK_PLAIN);
     let n = 1 << 18;
     let input: Vec<[f32; 4]> = (0..n)
         .map(|i| {

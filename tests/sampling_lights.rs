@@ -1,8 +1,8 @@
-//! The light samplers of glsl/shared/light_sampling.glsl on the GPU (glsl/tests/sample_light.comp)
+//! The light samplers of glsl/lights/light_sampling.glsl on the GPU (tests/kernels/sample_light.comp)
 //! for rects, spheres, disks, triangles and suns: chi-square tests of each against its own pdf()
 //! and pdf consistency per sample (the harness is tests/common/lights.rs), pdf() integrating to
 //! the probability of a sample and zero off the light; and the MIS weights of
-//! glsl/shared/mis.glsl (glsl/tests/mis_check.comp) at extreme pdfs.
+//! glsl/direct/mis.glsl (tests/kernels/mis_check.comp) at extreme pdfs.
 
 mod common;
 
@@ -373,7 +373,7 @@ fn pdf_integrates_to_one_and_is_zero_off_the_light() {
     let dirs: Vec<[f32; 4]> = (0..n).map(|_| f4(rng.sphere(), 0.0)).collect();
     // Each case's sampler: how much of it is area or solid-angle sampling (pdf integrates to 1)
     // and how much uniform sampling of the hemisphere facing a planar emitter (integrates to the
-    // emitter's Omega / (2 pi): a miss is no sample; glsl/shared/light_sampling.glsl).
+    // emitter's Omega / (2 pi): a miss is no sample; glsl/lights/light_sampling.glsl).
     const WHOLE: (f64, f64) = (1.0, 0.0);
     const HEMISPHERE: (f64, f64) = (0.0, 1.0);
     const MIXTURE: (f64, f64) = (0.5, 0.5);
@@ -481,7 +481,7 @@ fn pdf_integrates_to_one_and_is_zero_off_the_light() {
 #[test]
 fn mis_weights_are_bounded_and_sum_to_one() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "mis_check", illum::shaders::MIS_CHECK_PLAIN);
+    let k = Kernel::new(&ctx, "mis_check", illum_test_kernels::MIS_CHECK_PLAIN);
     let counts = [0.0f32, 1.0, 4.0, 16.0];
     // The smallest normal float, not a subnormal: GPUs may flush subnormals to zero (Vulkan
     // allows it without denormPreserve; NVIDIA does).

@@ -1,5 +1,5 @@
 //! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`, through
-//! glsl/tests/rng_check.comp): shuffled, Owen-scrambled Sobol pairs. Their structure is checked
+//! tests/kernels/rng_check.comp): shuffled, Owen-scrambled Sobol pairs. Their structure is checked
 //! exactly (the first 2^17 even, or odd, samples of a pixel put one point of every pair in each
 //! elementary interval of area 2^-17), and their randomization by chi-square tests over many
 //! pixels: each point uniform, and pairs of one sample, and the even and the odd sequence,
@@ -41,7 +41,7 @@ fn chi2_uniform_2d(what: &str, points: &[(f32, f32)], bins: usize) {
 #[test]
 fn camera_streams_are_scrambled_sobol_nets() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "rng_check", illum::shaders::RNG_CHECK_PLAIN);
+    let k = Kernel::new(&ctx, "rng_check", illum_test_kernels::RNG_CHECK_PLAIN);
     // 2^17 points: the Sobol matrix's every step (bits 16 and up too) shapes some interval.
     const M: u32 = 17;
     for (seed, pixel) in [(7u32, 12345u32), (0xdead_beef, 3)] {
@@ -74,7 +74,7 @@ fn camera_streams_are_scrambled_sobol_nets() {
 #[test]
 fn camera_streams_are_uniform_and_independent() {
     let ctx = context();
-    let k = Kernel::new(&ctx, "rng_check", illum::shaders::RNG_CHECK_PLAIN);
+    let k = Kernel::new(&ctx, "rng_check", illum_test_kernels::RNG_CHECK_PLAIN);
     const N: u32 = 1 << 16;
     // Over pixels, at a fixed sample index and pair: (seed, pixel, index, pair).
     let at = |index: u32, pair: u32| -> Vec<[f32; 4]> {

@@ -1,4 +1,4 @@
-//! The numerically stable helpers of glsl/shared/ at their extremes (glsl/tests/stable_check.comp),
+//! The numerically stable helpers of glsl/shared/ at their extremes (tests/kernels/stable_check.comp),
 //! against float64 references computed here from the same float32 inputs:
 //! * sphere light (light_sampling.glsl sample_sphere / light_pdf): the stable 1 - cos(theta_max)
 //!   through pdf = 1 / (2 pi (1 - cos theta_max)) for r/d from 1e-8 to 0.999 (docs/techniques.md,
@@ -37,7 +37,7 @@ const CASE_OFFSET_DISK: f64 = 4.0;
 const CASE_SUN: f64 = 5.0;
 
 fn run(ctx: &Context, records: &[Record]) -> Vec<Output> {
-    let k = Kernel::new(ctx, "stable_check", illum::shaders::STABLE_CHECK_PLAIN);
+    let k = Kernel::new(ctx, "stable_check", illum_test_kernels::STABLE_CHECK_PLAIN);
     k.run(&[0u32; 4], records, 0, records.len(), 0, records.len())
 }
 

@@ -1,4 +1,4 @@
-//! Stratified samples (glsl/shared/direct.glsl `stratify`): the light samples of a light and the
+//! Stratified samples (glsl/direct/direct.glsl `stratify`): the light samples of a light and the
 //! BRDF samples of a lobe at a shading point are jittered within the cells of a grid (n strata
 //! of a textured dome's rows, its columns in a randomly shifted Latin order). Each estimator
 //! alone must stay unbiased, so each is checked against a closed form with several samples per

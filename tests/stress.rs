@@ -167,7 +167,7 @@ fn closed_form_refuses_what_it_cannot_do() {
 
 /// Emitters that nearly fill the receiver's hemisphere (a 4000-wide rect, a radius-20 disk seen at
 /// its rim, a 200-wide emissive quad, all 1 above the floor): every light sample is bounded, as
-/// the light sampler's pdf promises (glsl/shared/light_sampling.glsl): at least 1 / (4 pi) per
+/// the light sampler's pdf promises (glsl/lights/light_sampling.glsl): at least 1 / (4 pi) per
 /// steradian over the emitter for the planar mixture, 1 / (2 pi) for a rect (hemisphere or
 /// spherical rect), so a Lambert floor of albedo ρ under radiance L gets ρ/π L cos / pdf ≤ 4 ρ L
 /// (2 ρ L) per sample. At 1 spp a pixel is one camera sample. Area sampling alone gave samples of

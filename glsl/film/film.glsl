@@ -1,11 +1,17 @@
-// The per-sample film bookkeeping of the film kernels (glsl/primary.comp,
+// The per-sample film bookkeeping of the film kernels (glsl/direct/primary.comp,
 // glsl/indirect/{full,path}.comp): the camera ray, the camera hit's AOVs, the firefly clamp, the
 // non-finite count and the sums with their half-buffer (src/film/mod.rs reads them). One copy,
 // so the kernels' films agree by construction.
 #ifndef ILLUM_FILM_GLSL
 #define ILLUM_FILM_GLSL
 
-#include "direct.glsl"
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/scene.glsl"
+#include "scene/surface.glsl"
+#include "scene/shading.glsl"
+#include "trace/hit.glsl"
+#include "lights/lights.glsl"
 
 // Direction of the camera ray through film position film_uv in [0,1]^2.
 vec3 camera_direction(vec2 film_uv) {

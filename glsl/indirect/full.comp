@@ -25,7 +25,12 @@
 // its cell's keys at the cone width the render's lookups there will have. The host averages the
 // records into the next generation's table.
 #version 460
-#include "indirect.glsl"
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "trace/trace.glsl"
+#include "direct/direct.glsl"
+#include "indirect/indirect.glsl"
 #include "film/film.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
@@ -83,6 +88,7 @@ void main() {
         a_reflection = aovs[pixel * AOV_PLANES + AOV_REFLECTION];
     }
     bool cache = radiosity_cache_on();
+    uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint count = update ? 1u : pc.film.sample_count;
     for (uint k = 0u; k < count; ++k) {
         uint sample_index = pc.film.first_sample + k;
@@ -126,7 +132,7 @@ void main() {
         for (;;) {
             if (trace) {
                 h = trace_closest(o, d, 0.0, INF, mask);
-                g_rays += 1u;
+                rays += 1u;
             }
             trace = true;
             mask = MASK_OCCLUDERS;
@@ -186,7 +192,7 @@ void main() {
                     }
                 }
             }
-            vec3 dl = shade ? direct_lighting(sh, m, rng) : vec3(0.0);
+            vec3 dl = shade ? direct_lighting(sh, m, rng, rays) : vec3(0.0);
             if (shade && ray <= RAY_VERTEX) {
                 // A path vertex: its direct light, then its diffuse chain.
                 if (update) {
@@ -269,7 +275,7 @@ void main() {
         a_reflection.rgb += reflected;
     }
     if (update) return;
-    acc.beauty_sq.w += float(g_rays);
+    acc.beauty_sq.w += float(rays);
     film[pixel] = acc;
     aovs[pixel * AOV_PLANES + AOV_DIRECT] = a_direct;
     aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;

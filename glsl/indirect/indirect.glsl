@@ -18,7 +18,16 @@
 #ifndef ILLUM_INDIRECT_GLSL
 #define ILLUM_INDIRECT_GLSL
 
-#include "direct.glsl"
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference2 : require
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/scene.glsl"
+#include "scene/shading.glsl"
+#include "scene/microfacet.glsl"
 
 // Most diffuse bounces done in place (Russian roulette ends paths long before).
 #define RADIOSITY_BRUTE_MAX 256u

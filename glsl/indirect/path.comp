@@ -8,7 +8,12 @@
 // at the camera hit), IndirectDiffuse and Reflection (paths whose first bounce took the diffuse
 // or a specular lobe).
 #version 460
-#include "indirect.glsl"
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "trace/trace.glsl"
+#include "direct/direct.glsl"
+#include "indirect/indirect.glsl"
 #include "film/film.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
@@ -31,6 +36,7 @@ void main() {
     vec4 a_indirect = aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
     vec4 a_reflection = aovs[pixel * AOV_PLANES + AOV_REFLECTION];
     uint max_depth = frame.max_depth;
+    uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     for (uint k = 0u; k < pc.sample_count; ++k) {
         uint sample_index = pc.first_sample + k;
         Rng rng;
@@ -46,7 +52,7 @@ void main() {
         // at vertex `depth` takes depth + 1 segments.
         for (uint depth = 1u;; ++depth) {
             Hit h = trace_closest(o, d, 0.0, INF, mask);
-            g_rays += 1u;
+            rays += 1u;
             bool shade = true;
             if (depth == 1u) {
                 if (!film_camera_hit(h, o, d, acc, le, m, sh)) break;
@@ -58,7 +64,7 @@ void main() {
                 m = get_material(s.material);
                 sh = shading_at(s, m, d);
             }
-            vec3 dl = shade ? direct_lighting(sh, m, rng) : vec3(0.0);
+            vec3 dl = shade ? direct_lighting(sh, m, rng, rays) : vec3(0.0);
             if (depth == 1u) direct = film_clamp(dl, acc);
             else rest += thr * dl;
             if (!(depth < PATH_MAX_VERTICES && depth + 2u <= max_depth)) break;
@@ -80,7 +86,7 @@ void main() {
         a_direct.rgb += le + direct;
         if (first_diffuse) a_indirect.rgb += rest; else a_reflection.rgb += rest;
     }
-    acc.beauty_sq.w += float(g_rays);
+    acc.beauty_sq.w += float(rays);
     film[pixel] = acc;
     aovs[pixel * AOV_PLANES + AOV_DIRECT] = a_direct;
     aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;

@@ -109,7 +109,7 @@ vec2 concentric_disk(vec2 u) {
 
 // Inverse trigonometry with float32 accuracy (a few ulp; Cephes atanf's polynomial after reduction
 // to |x| <= tan(pi/8)). Vulkan allows atan/asin/acos 4096 ULP and drivers use it: lavapipe's atan
-// has 2e-5 relative error and its acos 1.6e-4 absolute (glsl/tests/trig_check.comp), which shows in
+// has 2e-5 relative error and its acos 1.6e-4 absolute (tests/kernels/trig_check.comp), which shows in
 // solid angles, texel lookups and the irradiance formulas. sin and cos are accurate in practice.
 float atan_unit_interval(float x) {   // x in [0, 1]
     float base = 0.0;

@@ -6,10 +6,12 @@
 // lines right above a struct document it, a member's trailing comment (and comment lines directly
 // below it) document that member. Scalar block layout everywhere; members are ordered so that
 // std430 gives the same offsets and sizes (build.rs fails otherwise). tests/layout.rs checks every
-// size and offset against the offsets glslang emits for glsl/tests/layout_check.comp, and that this
+// size and offset against the offsets glslang emits for tests/kernels/layout_check.comp, and that this
 // header, that kernel and the Rust mirrors name the same structs.
 #ifndef ILLUM_LAYOUT_GLSL
 #define ILLUM_LAYOUT_GLSL
+
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 // Descriptor set 0.
 #define BINDING_FRAME 0
@@ -22,9 +24,11 @@
 //     layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
 // and adds to it as to the film (one invocation owns a pixel: no atomics).
 #define BINDING_AOVS 4
+// Floats of one AOV plane's sums at a pixel (its vec4), as the host reads them.
+#define AOV_CHANNELS 4
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
-#define BINDING_IMAGE 5   // the host's storage image (glsl/resolve_image.comp)
+#define BINDING_IMAGE 5   // the host's storage image (glsl/film/resolve_image.comp)
 
 // Specialization constants.
 #define SPEC_FEATURES 0
@@ -43,7 +47,7 @@
 #define FEATURE_MANY_LIGHTS 128
 // Settings, not the scene: shadow rays for a resampled subset of the candidates
 // (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
-// Off, their code is left out of the kernels (glsl/shared/direct.glsl; docs/techniques.md,
+// Off, their code is left out of the kernels (glsl/direct/direct.glsl; docs/techniques.md,
 // "Shadow resampling", "Shadow culling").
 #define FEATURE_SHADOW_RESAMPLE 256
 #define FEATURE_SHADOW_CULL 512
@@ -81,7 +85,7 @@
 // light's own surface (emissive geometry lit by itself). A sphere then counts the point as inside
 // (float rounding cannot put it outside and sample the outer cap), a planar light skips itself.
 #define LIGHT_FLAG_SELF 8
-// A dome's map convention (docs/scene-format.md; glsl/shared/dome_map.glsl): neither bit is illum's.
+// A dome's map convention (docs/scene-format.md; glsl/lights/dome_map.glsl): neither bit is illum's.
 #define LIGHT_FLAG_DOME_MITSUBA 16
 #define LIGHT_FLAG_DOME_PBRT 32
 
@@ -313,8 +317,8 @@ struct GpuLight {
 };
 
 // Importance-sampling tables of a dome's map (src/gpu_scene/dome.rs builds them;
-// glsl/shared/light_sampling.glsl reads them) over a grid of width x height cells of its map
-// coordinates (glsl/shared/dome_map.glsl: the texels, or for the Mitsuba convention the cells
+// glsl/lights/light_sampling.glsl reads them) over a grid of width x height cells of its map
+// coordinates (glsl/lights/dome_map.glsl: the texels, or for the Mitsuba convention the cells
 // between texel centres), each weighted by the luminance the lookup gives inside it (every cell
 // where the radiance can be positive has a weight > 0) times the solid angle per unit map area at
 // its centre. width == 0: no table (uniform sphere).
@@ -365,14 +369,23 @@ struct GpuTexture {
 };
 
 // Accumulated per pixel over all samples so far (sums, divided by the sample count on readback).
+// Each member's `channels:` line names its floats: the film channels the host reads
+// (src/render/film.rs) and partial EXRs store, whose count, offsets and names build.rs generates
+// from these lines.
 struct FilmPixel {
     vec4 beauty;     // rgb sum; w = samples the firefly clamp reduced
+                     // channels: beauty.r beauty.g beauty.b clamped
     vec4 beauty_sq;  // rgb sum of squares (for the variance of the mean); w = rays traced
+                     // channels: beauty_sq.r beauty_sq.g beauty_sq.b rays
     vec4 albedo;     // rgb sum over samples that hit a surface; w = number of such samples
+                     // channels: albedo.r albedo.g albedo.b hits
     vec4 normal;     // xyz sum of shading normals; w = sum of hit distances
+                     // channels: normal.x normal.y normal.z depth
     vec4 emission;   // rgb sum of directly seen emission; w = samples with non-finite beauty
+                     // channels: emission.r emission.g emission.b non_finite
     vec4 beauty_odd; // rgb sum over the odd-numbered samples only: the two half-buffers (even =
                      // beauty - beauty_odd) give an unbiased estimate of the pixel's variance
+                     // channels: odd.r odd.g odd.b odd.unused
 };
 
 // The compute BVH: device addresses of its arrays (uniform buffer at BINDING_BVH).
@@ -428,7 +441,7 @@ struct BvhInstance {
     uint pad;
 };
 
-// A ray of glsl/trace_query.comp (the trace interface as a kernel, for tests and benchmarks).
+// A ray of glsl/trace/trace_query.comp (the trace interface as a kernel, for tests and benchmarks).
 struct QueryRay {
     vec3 origin;
     float tmin;
@@ -442,7 +455,7 @@ struct QueryRay {
     uint pad2;
 };
 
-// What glsl/trace_query.comp reports per ray: trace_closest's Hit and trace_occluded's answer.
+// What glsl/trace/trace_query.comp reports per ray: trace_closest's Hit and trace_occluded's answer.
 struct QueryHit {
     float t;
     uint kind;

@@ -1,5 +1,10 @@
 //! A resolved film: the image planes of one render, as outputs write them.
 
+/// The EXR layers of the film's own RGB planes besides the beauty (`R`, `G`, `B`) and `Z`: albedo,
+/// normal, emission and variance (`<layer>.R/G/B`, the normal's `.X/Y/Z`). AOV planes take other
+/// names (`super::check_aov_names`).
+pub const FILM_LAYERS: [&str; 4] = ["Albedo", "N", "Emission", "Variance"];
+
 /// Linear, scene-referred image planes of one render, row-major, top row first, width*height each.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Film {

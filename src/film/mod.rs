@@ -1,5 +1,5 @@
-//! The film: per-pixel sums of every plane (FilmPixel's 24 floats, then 4 per AOV plane that the
-//! integrator declares), moved off the device on a fixed grid of sample blocks and accumulated
+//! The film: per-pixel sums of every plane (FilmPixel's floats, then 4 per AOV plane that the
+//! integrator declares; channel counts, offsets and names generated from glsl/shared/layout.glsl), moved off the device on a fixed grid of sample blocks and accumulated
 //! exactly, so that a render split into jobs (sample ranges, pixel windows) and merged is
 //! bit-identical to the render in one piece.
 //!
@@ -21,12 +21,12 @@
 //!   [`BoundaryBlock`]; merging takes each boundary block once, from whichever job has it.
 
 use crate::error::Result;
-use crate::layout::FilmPixel;
+use crate::layout::{self, FilmPixel};
 mod image;
 pub mod memory;
 
 use crate::vk::{Buffer, Context};
-pub use image::{AovPlane, Film};
+pub use image::{AovPlane, FILM_LAYERS, Film};
 
 /// Samples per block of the film grid (and the most one invocation takes per dispatch).
 pub const FILM_BLOCK: u32 = 256;
@@ -48,9 +48,9 @@ pub fn check_spp(spp: u32) -> std::result::Result<(), String> {
     }
 }
 /// Floats per pixel in the device film (FilmPixel).
-pub const FILM_CHANNELS: usize = 24;
+pub const FILM_CHANNELS: usize = FilmPixel::CHANNELS;
 /// Floats per AOV plane and pixel (a vec4 of the "aovs" buffer: rgb sums, w unused).
-pub const AOV_CHANNELS: usize = 4;
+pub const AOV_CHANNELS: usize = layout::AOV_CHANNELS as usize;
 
 /// Channels per pixel of a film with `aov_planes` AOV planes.
 pub fn channels(aov_planes: usize) -> usize {
@@ -58,13 +58,13 @@ pub fn channels(aov_planes: usize) -> usize {
 }
 
 /// FilmPixel's normal.w, the sum of hit distances.
-const DEPTH_SUM: usize = 15;
+const DEPTH_SUM: usize = FilmPixel::NORMAL + 3;
 
 /// Fixed-point unit of channel c's exact sums: 2^-fixed_bits(c). The squares (FilmPixel's
 /// beauty_sq.rgb) and the hit distances get a coarser unit for their range (a camera inside a
 /// sphere of radius 1e20 sums distances of 1e20); AOV planes have the beauty's.
 pub fn fixed_bits(c: usize) -> i32 {
-    if (4..7).contains(&c) || c == DEPTH_SUM {
+    if (FilmPixel::BEAUTY_SQ..FilmPixel::BEAUTY_SQ + 3).contains(&c) || c == DEPTH_SUM {
         24
     } else {
         64
@@ -87,7 +87,7 @@ pub fn check_aov_names<S: AsRef<str>>(names: &[S]) -> std::result::Result<(), St
                 "AOV plane {name:?} is not a layer name (an ASCII capital, then letters, digits or _; at most 64)"
             ));
         }
-        if ["Albedo", "N", "Emission", "Variance"].contains(&name) {
+        if FILM_LAYERS.contains(&name) {
             return Err(format!("AOV plane {name:?} is a layer of the film itself"));
         }
         if names[..k].iter().any(|n| n.as_ref() == name) {
@@ -169,8 +169,8 @@ pub struct BoundaryBlock {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilmSums {
     pub window: Window,
-    /// The integrator's AOV planes: channels 24 + 4 k .. 24 + 4 k + 4 of a pixel are plane k's
-    /// (rgb sums; the fourth is unused).
+    /// The integrator's AOV planes: channels [`FILM_CHANNELS`] + 4 k .. + 4 of a pixel are plane
+    /// k's (rgb sums; the fourth is unused).
     pub aov_planes: Vec<String>,
     /// Window pixels, row-major, [`FilmSums::channels`] values each.
     pub sums: Vec<i128>,
@@ -187,7 +187,7 @@ impl FilmSums {
         }
     }
 
-    /// Values per pixel: 24, and 4 per AOV plane.
+    /// Values per pixel: [`FILM_CHANNELS`], and 4 per AOV plane.
     pub fn channels(&self) -> usize {
         channels(self.aov_planes.len())
     }
@@ -343,12 +343,12 @@ pub fn resolve(
     let mut odd = vec![[0.0f32; 3]; film.pixel_count()];
     let (mut non_finite, mut clamped, mut rays) = (0u64, 0u64, 0u64);
     // Offsets of the FilmPixel members in the flattened sums.
-    const BEAUTY: usize = 0;
-    const BEAUTY_SQ: usize = 4;
-    const ALBEDO: usize = 8;
-    const NORMAL: usize = 12;
-    const EMISSION: usize = 16;
-    const BEAUTY_ODD: usize = 20;
+    const BEAUTY: usize = FilmPixel::BEAUTY;
+    const BEAUTY_SQ: usize = FilmPixel::BEAUTY_SQ;
+    const ALBEDO: usize = FilmPixel::ALBEDO;
+    const NORMAL: usize = FilmPixel::NORMAL;
+    const EMISSION: usize = FilmPixel::EMISSION;
+    const BEAUTY_ODD: usize = FilmPixel::BEAUTY_ODD;
     for (i, s) in sums.chunks_exact(channels).enumerate() {
         let p: [f64; FILM_CHANNELS] = std::array::from_fn(|k| from_fixed(s[k], k));
         for (k, plane) in film.aovs.iter_mut().enumerate() {

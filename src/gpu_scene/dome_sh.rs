@@ -1,11 +1,11 @@
 //! The dome's radiance projected on real spherical harmonics of order 2 (SH9), in world
 //! directions: the control radiance L_SH of the dome's control variate (docs/techniques.md,
 //! "Control variates", condition 2, and "Analytic unshadowed irradiance";
-//! glsl/shared/irradiance.glsl `sh9_*`).
+//! glsl/lights/irradiance.glsl `sh9_*`).
 //!
 //! L_lm = ∫ L(w) Y_lm(w) dω over the sphere, with L what the renderer looks up
 //! (src/scene/dome_map.rs: the convention's map, filter, wrap and the rotation about +Y, the
-//! reference of glsl/shared/dome_map.glsl), integrated over the map: dω = J du dv with J the
+//! reference of glsl/lights/dome_map.glsl), integrated over the map: dω = J du dv with J the
 //! convention's Jacobian. Maps of up to 2^16 texels: the lookup is a polynomial of degree ≤ 1
 //! in u and in v between its breakpoints (texel edges and centres; Mitsuba's rows at
 //! j/(H − 1)), split further into at least 64 cells per axis, and the quadrature takes
@@ -32,7 +32,7 @@ use std::f64::consts::PI;
 const SH_CLAMP: f64 = 4.0;
 
 /// Real SH basis Y_lm(d) of a unit direction, order 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22, with
-/// (x, y, z) the world axes (the same as `sh9_basis` in glsl/shared/irradiance.glsl).
+/// (x, y, z) the world axes (the same as `sh9_basis` in glsl/lights/irradiance.glsl).
 pub fn basis(d: DVec3) -> [f64; 9] {
     let (x, y, z) = (d.x, d.y, d.z);
     [

@@ -471,7 +471,7 @@ fn lobe(l: &crate::scene::SpecularLobe) -> GpuLobe {
         fresnel0: f0.extend(0.0).to_array(),
         fresnel1: f1.extend(0.0).to_array(),
         // Mitsuba 3's floor of 1e-4, where the lobe is still exact in float32; zero along both
-        // axes is a perfect mirror (a delta lobe, glsl/shared/microfacet.glsl).
+        // axes is a perfect mirror (a delta lobe, glsl/scene/microfacet.glsl).
         alpha: if l.alpha == glam::Vec2::ZERO {
             [0.0; 2]
         } else {
@@ -532,7 +532,7 @@ fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
                 p0: v4(center - origin, radius),
                 p1: [0.0; 3],
                 // The origin's signed distance to the surface and to the centre, in double precision:
-                // intersect_sphere's exact start (glsl/shared/shapes.glsl).
+                // intersect_sphere's exact start (glsl/trace/shapes.glsl).
                 p2: [(dist - radius) as f32, dist as f32, 0.0, 0.0],
                 area: (4.0 * PI * radius * radius) as f32,
             }

@@ -1,9 +1,9 @@
 //! The mean radiance of a textured rect, disk or sphere light over its surface: the constant
-//! radiance of its control variate (glsl/shared/direct.glsl; docs/techniques.md,
+//! radiance of its control variate (glsl/direct/direct.glsl; docs/techniques.md,
 //! "Control variates", condition 2).
 //!
 //! The mean is taken of what `texture_lookup` returns, under the uv parametrization the light's
-//! samples use (glsl/shared/surface.glsl): rect uv = the unit square, affine in area; disk
+//! samples use (glsl/scene/surface.glsl): rect uv = the unit square, affine in area; disk
 //! uv = 0.5 + local xy / 2R, the disk inscribed in the unit square; sphere uv = lat-long of the
 //! outward normal, theta = pi v, area ∝ sin(pi v). The lookup (bilinear or nearest, any wrap) is a
 //! polynomial of degree ≤ 1 in u and in v between the breakpoints {0, 1, i/W, (i + 1/2)/W}: the

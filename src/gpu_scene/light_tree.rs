@@ -2,7 +2,7 @@
 //! `BVHLightSampler`): a binary tree over the finite lights (rect, disk, sphere, triangle; emissive
 //! geometry included), one light per leaf, each node with the bounds, emitted power and orientation
 //! cone of its subtree. Light samples descend it from the root choosing a child with probability
-//! proportional to its importance at the shading point (glsl/shared/light_tree.glsl); the
+//! proportional to its importance at the shading point (glsl/lights/light_tree.glsl); the
 //! probability of a given light is recomputed by replaying its root-to-leaf trail, so that MIS
 //! weights of BRDF samples use the sampler's own PMF. The infinite lights (dome, sun) are not in
 //! the tree: direct lighting loops over them as over few lights.
@@ -319,7 +319,7 @@ impl Builder {
 }
 
 /// The tree's importance of `node` at point `p` with normal `n`, in f64 (the float64 twin of
-/// `light_tree_importance` in glsl/shared/light_tree.glsl, for tests and diagnostics).
+/// `light_tree_importance` in glsl/lights/light_tree.glsl, for tests and diagnostics).
 pub fn importance(node: &GpuLightTreeNode, p: DVec3, n: DVec3) -> f64 {
     let d3 = |v: [f32; 3]| DVec3::new(v[0].into(), v[1].into(), v[2].into());
     let (lo, hi) = (d3(node.lo), d3(node.hi));

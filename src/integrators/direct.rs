@@ -1,4 +1,4 @@
-//! The direct-lighting integrator (glsl/primary.comp, glsl/shared/direct.glsl): camera rays, the
+//! The direct-lighting integrator (glsl/direct/primary.comp, glsl/direct/direct.glsl): camera rays, the
 //! AOVs, and emission plus direct lighting at the first hit, estimated as "Physically Based
 //! Lighting at Pixar" does (docs/techniques.md, "The direct-lighting estimator"). Its parameters,
 //! [`DirectLighting`], light every integrator's camera hits.
@@ -85,7 +85,7 @@ impl std::str::FromStr for LightSelection {
 }
 
 /// Control variates for the diffuse light samples of the looped lights (docs/techniques.md,
-/// "Control variates"; glsl/shared/direct.glsl): the analytic unshadowed irradiance scaled by a
+/// "Control variates"; glsl/direct/direct.glsl): the analytic unshadowed irradiance scaled by a
 /// visibility estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ControlVariates {

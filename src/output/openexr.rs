@@ -114,6 +114,8 @@ fn layer_attributes(path: &Path, meta: &ImageMetadata) -> Result<LayerAttributes
     Ok(attributes)
 }
 
+use crate::film::FILM_LAYERS;
+
 /// Where one EXR channel's samples live in the film.
 #[derive(Clone, Copy)]
 enum Source<'a> {
@@ -144,12 +146,13 @@ impl<'a> FilmChannels<'a> {
             }
         };
         const RGB: [&str; 3] = ["R", "G", "B"];
+        let [albedo, normal, emission, variance_layer] = FILM_LAYERS;
         add("", RGB, &film.beauty);
-        add("Albedo", RGB, &film.albedo);
-        add("N", ["X", "Y", "Z"], &film.normal);
-        add("Emission", RGB, &film.emission);
+        add(albedo, RGB, &film.albedo);
+        add(normal, ["X", "Y", "Z"], &film.normal);
+        add(emission, RGB, &film.emission);
         if let Some(variance) = &film.variance {
-            add("Variance", RGB, variance);
+            add(variance_layer, RGB, variance);
         }
         for aov in &film.aovs {
             add(&aov.name, RGB, &aov.rgb);

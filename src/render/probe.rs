@@ -1,4 +1,4 @@
-//! Host side of glsl/loop_probe.comp: whether the driver caps loop iterations. Older llvmpipe
+//! Host side of glsl/render/loop_probe.comp: whether the driver caps loop iterations. Older llvmpipe
 //! (Mesa 22.3) ends every loop nest of an invocation after 65535 iterations in total, silently: a
 //! dispatch of 8192 samples per pixel of a simple scene lost 8% of its samples, one of 32768 lost
 //! 52%. Where the cap exists, the renderer runs one sample per invocation and dispatch.

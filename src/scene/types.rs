@@ -149,7 +149,7 @@ impl Texture {
     }
 
     /// The texture at `uv` ((0, 0) the top-left corner of the image), as the renderer reads it
-    /// (`texture_lookup` in glsl/shared/scene.glsl), in f64.
+    /// (`texture_lookup` in glsl/scene/scene.glsl), in f64.
     pub fn lookup(&self, uv: glam::DVec2) -> glam::DVec4 {
         let size = glam::DVec2::new(f64::from(self.width), f64::from(self.height));
         match self.filter {
@@ -318,7 +318,7 @@ pub enum LightKind {
     },
 }
 
-/// How a dome's map covers the sphere (docs/scene-format.md, glsl/shared/dome_map.glsl).
+/// How a dome's map covers the sphere (docs/scene-format.md, glsl/lights/dome_map.glsl).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DomeConvention {
     /// Lat-long: u = atan2(x, −z)/2π + ½ (½ at −Z, growing toward +X), v = θ/π from +Y; texel

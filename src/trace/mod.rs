@@ -1,4 +1,4 @@
-//! Trace structures behind the one GLSL trace interface (glsl/shared/trace.glsl): hardware ray
+//! Trace structures behind the one GLSL trace interface (glsl/trace/trace.glsl): hardware ray
 //! queries (acceleration structures) or illum's compute BVH.
 
 pub mod bench;

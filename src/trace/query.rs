@@ -1,4 +1,4 @@
-//! Host side of glsl/trace_query.comp: the trace interface as a kernel over a list of rays, for
+//! Host side of glsl/trace/trace_query.comp: the trace interface as a kernel over a list of rays, for
 //! tests (both trace paths must agree) and for `illum bench trace`.
 
 use crate::error::Result;

@@ -1,4 +1,4 @@
-//! The validated Vulkan context every GPU test runs on, and the test kernels of glsl/tests/.
+//! The validated Vulkan context every GPU test runs on, and the test kernels of tests/kernels/.
 
 use ash::vk;
 use glam::DVec3;
@@ -42,7 +42,7 @@ pub fn d3<const N: usize>(v: [f32; N]) -> DVec3 {
     DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]))
 }
 
-/// A test kernel of glsl/tests/: binding 0 parameters, 1 input, 2 output (storage buffers), push
+/// A test kernel of tests/kernels/: binding 0 parameters, 1 input, 2 output (storage buffers), push
 /// constants (mode, count, seed, 0); one invocation per item, 64 per workgroup.
 pub struct Kernel {
     ctx: Context,

@@ -1,4 +1,4 @@
-//! GPU lights built from host geometry for the light test kernels (glsl/tests/sample_light.comp,
+//! GPU lights built from host geometry for the light test kernels (tests/kernels/sample_light.comp,
 //! irradiance_check.comp), the sample_light.comp harness that checks a sampler sample by sample
 //! and by a chi-square test, the domains of those tests on the lights' surfaces, and the host's
 //! float64 ray-light test.
@@ -120,7 +120,7 @@ pub struct Lights {
 impl Lights {
     pub fn new() -> Lights {
         let ctx = context();
-        let k = Kernel::new(&ctx, "sample_light", illum::shaders::SAMPLE_LIGHT_PLAIN);
+        let k = Kernel::new(&ctx, "sample_light", illum_test_kernels::SAMPLE_LIGHT_PLAIN);
         Lights { ctx, k }
     }
     pub fn sample(&self, prm: &LightParams, n: usize, seed: u32) -> Samples {

@@ -2,7 +2,7 @@
 //! of the floor, L_o(p, v) = Σ_lights ∫ f(l, v) L_e(l) (n·l) dω_l, by composite Gauss-Legendre
 //! quadrature over each light, with the BRDF written here from its formulas (docs/techniques.md,
 //! "The D-BRDF" and "Cook-Torrance lobes"; Walter et al. 2007; Heitz 2014; pbrt-v4's
-//! height-correlated GGX), not ported from `glsl/shared/microfacet.glsl`.
+//! height-correlated GGX), not ported from `glsl/scene/microfacet.glsl`.
 //!
 //! Each domain is parameterised so that its edges, the horizon included, are coordinate lines
 //! and the integrand is smooth inside: a rect light over its area, a sphere light or the sun

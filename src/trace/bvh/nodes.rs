@@ -1,4 +1,4 @@
-//! The node layout the kernels walk (glsl/shared/trace_bvh.glsl): binary trees collapsed into
+//! The node layout the kernels walk (glsl/trace/bvh.glsl): binary trees collapsed into
 //! 4-wide nodes whose children's boxes are quantized to 8 bits per plane on a grid over the
 //! node's box (`BvhNode`, 64 bytes, 14 of its 16 words used), so that one small fetch tests four
 //! boxes. See src/trace/bvh/mod.rs for the measurements that chose this layout.

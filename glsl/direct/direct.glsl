@@ -1,0 +1,325 @@
+// The direct-lighting integrator of "Physically Based Lighting at Pixar" (Hery & Villemin 2013),
+// docs/techniques.md, "The direct-lighting estimator": per light and per lobe, light samples and
+// BRDF samples combined by multiple importance sampling (power heuristic), BRDF samples pruned to
+// those that hit a light, and shadow rays traced only for the samples whose MIS-weighted
+// contribution is not zero.
+//
+// Conventions:
+// * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
+//   `share` its solid angle over the hemisphere's 2 pi (1 for the dome), N_L in [1, N_max]; a
+//   textured dome takes 8 N_max (measured at equal time, light_count_for). Above
+//   DIRECT_LOOP_LIGHTS lights (FEATURE_MANY_LIGHTS), the infinite lights are still looped over that
+//   way and N_max samples are spread over the finite lights, each picking a light by descending the
+//   light tree (select_light(), lights/light_select.glsl): light l then has the expected count
+//   n_l = N_max P(l | p, n) in every MIS weight, light_pmf() replaying P from l's trail for BRDF
+//   samples. LIGHT_SELECT_SCAN keeps the former pick (a linear CDF scan over all lights, infinite
+//   ones included) for comparison.
+// * BRDF samples: N_B per specular lobe, drawn once and shared by all lights (N_B counts every
+//   sample, also those that miss all lights or fall below the horizon). The diffuse lobe takes N_B
+//   cosine samples under TECHNIQUE_BRDF, or under MIS with INTEGRATOR_DIFFUSE_MIS; otherwise light
+//   samples only, as in the course.
+// * Lights are opaque objects (Mitsuba 3, pbrt-v4): shadow rays see geometry and the light
+//   surfaces that cast shadows (MASK_OCCLUDERS), so a BRDF sample counts only the first light it
+//   meets, and a light hides what is behind it, exactly like emissive geometry. A light with
+//   "shadows": false is transparent: BRDF samples count it and every light behind it. Both
+//   techniques use the same shadow rays, so the MIS weights sum to one.
+// * A shadow ray runs from the offset origin to the light point itself (not along the shading
+//   point's direction for the shading point's distance), ending short of it by a margin that
+//   scales like the float error of both ends, so it never reaches the emitter's own surface.
+// * A shading point on an emitter's own surface (emissive geometry lit by itself) sees that
+//   emitter as a sphere from inside (LIGHT_FLAG_SELF) or, for a planar emitter, not at all.
+// * A BRDF sample finds the finite lights it crosses by traversing the light BVH (a tree over their
+//   bounds, src/gpu_scene/lights.rs); the infinite lights (dome, sun) are always tested. At most
+//   DIRECT_MAX_CROSSED lights along one direction are counted.
+#ifndef ILLUM_DIRECT_GLSL
+#define ILLUM_DIRECT_GLSL
+
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/features.glsl"
+#include "scene/scene.glsl"
+#include "scene/shading.glsl"
+#include "scene/microfacet.glsl"
+#include "lights/light_sampling.glsl"
+#include "lights/lights.glsl"
+#include "lights/light_bvh.glsl"
+#include "lights/light_tree.glsl"
+#include "lights/light_select.glsl"
+#include "direct/mis.glsl"
+#include "direct/shadow.glsl"
+#include "direct/control_variates.glsl"
+
+uint light_count_for(GpuLight l, vec3 p, uint n_max) {
+    // A textured dome (a sky with its sun) varies far more over its directions than any other
+    // light: 8 N_max stratified samples. With scrambled Sobol camera samples, 0.84x, 0.41x and
+    // 0.76x the relMSE at equal time of 2 N_max on scenes/bench/dome.json, dome-occluders.json
+    // and mitsuba-dome.json (docs/performance-sampling.md, "The dome's sample count again").
+    if (l.kind == LIGHT_DOME && l.texture != NONE) return 8u * n_max;
+    return clamp(uint(ceil(light_share(l, p) * float(n_max))), 1u, n_max);
+}
+
+// Light i as seen from the shading point: flagged LIGHT_FLAG_SELF when p lies on its surface.
+GpuLight light_seen_from(Shading sh, uint i) {
+    GpuLight l = get_light(i);
+    if (i == sh.self_light) l.flags |= LIGHT_FLAG_SELF;
+    return l;
+}
+
+// Whether light l can light the shading point at all (a planar emitter cannot light itself).
+bool light_reaches(GpuLight l) {
+    return !light_self(l) || l.kind == LIGHT_SPHERE;
+}
+
+// Sum of the lobes' f cos for direction l (light samples), with each specular lobe's MIS weight
+// against its own BRDF samples. `n_l_pdf` is n_l p_l of the light technique (0 for a delta light).
+vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique, bool diffuse_mis, uint n_b) {
+    float cs = dot(sh.n, l);
+    if (cs <= 0.0 || dot(sh.ng, l) <= 0.0) return vec3(0.0);
+    vec3 sum = vec3(0.0);
+    // Diffuse: light samples alone, or MIS with n_b cosine samples.
+    float wd = 1.0;
+    if (technique == TECHNIQUE_MIS && diffuse_mis && n_l_pdf > 0.0)
+        wd = mis_power(1.0, n_l_pdf, float(n_b), cs * INV_PI);
+    sum += sh.albedo * (cs * INV_PI) * wd;
+    for (uint k = 0u; k < min(m.lobe_count, 2u); ++k) {
+        BrdfEval e = brdf_eval(m.lobes[k], sh.n, sh.t, sh.b, sh.v, l);
+        float w = 1.0;
+        if (technique == TECHNIQUE_MIS && n_l_pdf > 0.0) w = mis_power(1.0, n_l_pdf, float(n_b), e.pdf);
+        sum += e.f_cos * w;
+    }
+    return sum;
+}
+
+// Sample i of a group of n: u jittered within cell i of an nx x ny grid over [0, 1)^2. The cells
+// partition the square and each sample is uniform in its own, so the group's average stays
+// unbiased, and so do MIS weights (they use one sample's density), resampling and culling
+// (unbiased for any candidates given). Not under leave-one-out control variates, which need the
+// samples independent. Jittered sampling (Cook 1986). `rows` (a textured dome's marginal-
+// conditional warp): x in n strata, whose cumulative row mass this stratifies exactly, and y in
+// stratum (i + shift) mod n, `shift` uniform per group: a Latin hypercube whose random cyclic
+// order keeps each sample uniform over its x stratum (a fixed order would be biased). Measured on
+// scenes/bench/dome.json, relMSE at 64 spp: 2.3e-3 for a 2 x 2 grid, 1.9e-3 for rows alone,
+// 8.5e-4 with 8 samples and the shifted columns (9.8e-4 without). Otherwise nx * ny = n,
+// nx >= ny, as square as n's divisors allow: area lights, cones, lobes and a constant dome's
+// sphere warp both dimensions alike.
+vec2 stratify(vec2 u, uint i, uint n, uint shift, bool rows) {
+    if (n <= 1u) return u;
+    uvec2 cell = uvec2(i, (i + shift) % n), cells = uvec2(n);
+    if (!rows) {
+        uint ny = uint(sqrt(float(n) + 0.5));
+        while (n % ny != 0u) ny -= 1u;
+        cells = uvec2(n / ny, ny);
+        cell = uvec2(i % cells.x, i / cells.x);
+    }
+    // (k + u) / n can round up to 1 in float: the samplers expect u < 1.
+    return min((vec2(cell) + u) / vec2(cells), vec2(0.99999994));
+}
+
+// Whether light l's samples take stratify()'s rows: a dome with sampling tables (a textured one).
+bool stratify_rows(GpuLight l, GpuDomeSampling dome) { return l.kind == LIGHT_DOME && dome.width > 0u; }
+
+// Light sample i of the `count` of light l (looped or picked, n_l its expected count): its
+// candidate, or with a control variate (cv) its ray and g_j (in cv_tr and the ray's s).
+void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling dome, float n_l, bool cv,
+                         uint i, uint count, uint shift, inout float cv_tr, inout ShadowGroup group,
+                         inout ShadowRay ray, inout Rng rng) {
+    uint technique = frame.technique;
+    bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
+    vec2 u = rng_next2(rng);
+    LightSample ls = sample_light(l, dome, sh.p, cv ? u : stratify(u, i, count, shift, stratify_rows(l, dome)));
+    if (!(ls.pdf > 0.0)) return;
+    vec3 le = light_radiance(l, ls.uv, ls.delta);
+    vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, frame.brdf_samples);
+    // Divide by the expected count n_l (many lights: the selection probability is in it).
+    vec3 c = f * le / (ls.pdf * n_l);
+    if (cv) {
+        // g_j / (rho Lc(w_j) / pi), zero exactly where eval_lobes (and so c) is. V_j is the
+        // ray's answer, also where c is 0 (a black texel): V_j must not depend on L.
+        float cs = dot(sh.n, ls.wi);
+        float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
+        if (s > 0.0) {
+            cv_tr += 1.0;
+            shadow_ray(ray, ls.wi, ls.dist, c, s, false);
+        }
+    } else {
+        shadow_candidate(group, ray, ls.wi, ls.dist, c, rng);
+    }
+}
+
+// A BRDF sample's direction, shared by every light it crosses.
+struct BrdfDir {
+    vec3 wi, weight;
+    float pdf;
+    bool delta;
+};
+
+// BRDF sample i of the `count` of lobe k (k == lobes: the diffuse lobe), stratified: its direction
+// and the lights it crosses (ids, their count; 0 when the sample is invalid: the pruning, nothing
+// to trace).
+uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, uint i, uint count, inout Rng rng, out BrdfDir s,
+                        out uint ids[DIRECT_MAX_CROSSED]) {
+    s.delta = false;
+    vec2 u = stratify(rng_next2(rng), i, count, 0u, false);
+    if (k == min(m.lobe_count, 2u)) {
+        vec3 c = cosine_hemisphere(u);
+        s.wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
+        s.pdf = c.z * INV_PI;
+        s.weight = sh.albedo;
+    } else {
+        BrdfSample bs = brdf_sample(m.lobes[k], sh.n, sh.t, sh.b, sh.v, u);
+        if (!bs.valid) return 0u;
+        s.wi = bs.wi; s.weight = bs.weight; s.pdf = bs.pdf; s.delta = bs.delta;
+    }
+    if (!(s.pdf > 0.0) || dot(s.wi, sh.ng) <= 0.0) return 0u;
+    return lights_along(sh.p, s.wi, ids);
+}
+
+// The candidate of BRDF sample s for light `id` it crosses.
+void direct_brdf_light(Shading sh, GpuDomeSampling dome, LightSelection sel, BrdfDir s, uint id,
+                       inout ShadowGroup group, inout ShadowRay ray, inout Rng rng) {
+    uint technique = frame.technique;
+    uint n_max = frame.light_samples;
+    uint n_b = frame.brdf_samples;
+    GpuLight l = light_seen_from(sh, id);
+    if (!light_reaches(l)) return;
+    LightHit lh = light_hit(l, dome, sh.p, s.wi);
+    if (!(lh.pdf > 0.0)) return;
+    float w = 1.0;
+    if (technique == TECHNIQUE_MIS && !s.delta) {
+        float n_l = light_picked(sel, l)
+            ? light_pmf(sel, sh.p, sh.n, float(n_max), id, l)
+            : float(light_count_for(l, sh.p, n_max));
+        w = mis_power(float(n_b), s.pdf, n_l, lh.pdf);
+    }
+    vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
+    shadow_candidate(group, ray, s.wi, lh.t, c, rng);
+}
+
+// Samples come in groups, in this order: the light samples of each round (a looped light, or one
+// pick from the tree or the scan), a closing group (the picks' resampling), then the BRDF samples
+// of each lobe (specular ones, and the diffuse lobe where it is BRDF-sampled). One loop iteration
+// makes at most one shadow ray (a light sample; a BRDF sample and the first light it crosses, or
+// the next one; a pick of a resampling flush) and traces it: the only call site (shadow.glsl).
+// `rays` counts the shadow rays traced.
+vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) {
+    uint nlights = frame.light_count;
+    if (nlights == 0u) return vec3(0.0);
+    uint technique = frame.technique;
+    uint n_max = frame.light_samples;
+    uint n_b = frame.brdf_samples;
+    bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
+    GpuDomeSampling dome = dome_sampling();
+    LightSelection sel = light_selection(sh.p, sh.n);
+    vec3 result = vec3(0.0);
+
+    // The looped lights, then n_max picks (light_select.glsl).
+    uint looped = looped_lights(sel);
+    uint rounds = technique == TECHNIQUE_BRDF ? 0u : looped + (lights_picked(sel) ? n_max : 0u);
+    uint lobes = min(m.lobe_count, 2u);
+    bool diffuse_brdf = technique == TECHNIQUE_BRDF || diffuse_mis;
+    uint groups = rounds + 1u + (technique == TECHNIQUE_LIGHT ? 0u : lobes + 1u);
+    uint g = 0u;          // the group
+    bool opened = false;  // whether g's setup below has run
+    uint j = 0u, count = 0u;   // the next sample of g, and g's samples (0: none)
+    uint shift = 0u;      // a textured dome's column order (stratify)
+    bool close = false;   // whether g ends with shadow_group_end
+    GpuLight l;           // a light round's light
+    float n_l = 0.0;      // its expected samples per shading point
+    bool cv = false;      // with a control variate
+    vec3 cv_sv = vec3(0.0), cv_so = vec3(0.0);
+    float cv_vis = 0.0, cv_tr = 0.0;
+    bool closed = false;  // whether g's closing flush has started
+    BrdfDir bdir;         // a BRDF sample's direction, and the lights it crosses still to do
+    uint ids[DIRECT_MAX_CROSSED];
+    uint crossed = 0u, q = 0u;
+    ShadowGroup group = shadow_group();
+    ShadowRay ray;
+    while (g < groups) {
+        if (!opened) {
+            opened = true;
+            j = 0u;
+            count = 0u;
+            shift = 0u;
+            close = false;
+            cv = false;
+            cv_sv = cv_so = vec3(0.0);
+            cv_vis = cv_tr = 0.0;
+            closed = false;
+            crossed = q = 0u;
+            if (g < rounds) {
+                uint li;
+                bool picked = g >= looped;
+                bool reached = true;
+                if (picked) reached = select_light(sel, sh.p, sh.n, float(n_max), rng, li, n_l);
+                else li = looped_light(sel, g);
+                if (reached) {
+                    l = light_seen_from(sh, li);
+                    reached = light_reaches(l);
+                }
+                if (reached) {
+                    count = picked ? 1u : light_count_for(l, sh.p, n_max);
+                    if (!picked) n_l = float(count);
+                    close = !picked;
+                    cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
+                    // The textured dome's column order (stratify), drawn once per group.
+                    if (!cv && count > 1u && stratify_rows(l, dome)) shift = min(uint(rng_next(rng) * float(count)), count - 1u);
+                }
+            } else if (g == rounds) {
+                close = technique != TECHNIQUE_BRDF;
+            } else {
+                bool diffuse = g - rounds - 1u == lobes;
+                if (!diffuse || (diffuse_brdf && max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0)) {
+                    count = n_b;
+                    close = true;
+                }
+            }
+        }
+        ray.on = false;
+        if (group.flushing && !shadow_flush_next(group, ray)) {
+            result += group.part;
+            shadow_flush_done(group);
+        }
+        if (!group.flushing) {
+            // The next light a BRDF sample crosses, else the next sample, else the group's end.
+            bool cross = q < crossed;
+            if (!cross && j < count) {
+                j += 1u;
+                if (g < rounds) {
+                    direct_light_sample(sh, m, l, dome, n_l, cv, j - 1u, count, shift, cv_tr, group, ray, rng);
+                } else {
+                    crossed = direct_brdf_sample(sh, m, g - rounds - 1u, j - 1u, count, rng, bdir, ids);
+                    q = 0u;
+                    cross = crossed > 0u;
+                }
+            } else if (!cross && !closed) {
+                closed = true;
+                if (close) shadow_group_end(group, rng);
+            } else if (!cross) {
+                if (cv) result += control_variate(sh, l, dome, float(count), cv_sv, cv_so, cv_vis, cv_tr);
+                g += 1u;
+                opened = false;
+            }
+            if (cross) direct_brdf_light(sh, dome, sel, bdir, ids[q++], group, ray, rng);
+        }
+        if (ray.on) {
+            // The one shadow-ray call site.
+            rays += 1u;
+            bool visible = shadow_visible(sh, ray.w, ray.dist);
+            if (ray.cv >= 0.0) {
+                // g_j / (rho / pi): the ray came from this light round's direct_light_sample().
+                vec3 gj = ray.cv * control_radiance(l, dome, ray.w);
+                if (visible) {
+                    cv_vis += 1.0;
+                    cv_sv += gj;
+                } else {
+                    cv_so += gj;
+                }
+            }
+            if (visible && ray.flush) group.part += ray.c;
+            else if (visible) result += ray.c;
+        }
+    }
+    return result;
+}
+
+#endif

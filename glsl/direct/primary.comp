@@ -1,0 +1,43 @@
+// illum-variants: rq bvh
+// Camera rays with a box pixel filter: the AOVs (albedo, normal, depth, emission) and the beauty,
+// emission seen directly plus direct lighting at the first hit (glsl/direct/direct.glsl).
+#version 460
+#extension GL_EXT_scalar_block_layout : require
+#include "shared/layout.glsl"
+#include "trace/trace.glsl"
+#include "direct/direct.glsl"
+#include "film/film.glsl"
+
+layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
+layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
+layout(push_constant, scalar) uniform PassBlock { PassConstants pc; };
+
+void main() {
+    uvec2 local = gl_GlobalInvocationID.xy;
+    if (local.x >= pc.tile.z || local.y >= pc.tile.w) return;
+    uvec2 pix = local + pc.tile.xy;
+    uint pixel = pix.y * frame.width + pix.x;
+    // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
+    // fixed point (src/film/mod.rs), since long float32 running sums round systematically.
+    FilmPixel acc = film[pixel];
+    uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
+    for (uint k = 0u; k < pc.sample_count; ++k) {
+        uint sample_index = pc.first_sample + k;
+        Rng rng;
+        vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);
+        vec3 o = frame.cam_origin.xyz;
+        Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
+        rays += 1u;
+        vec3 beauty = vec3(0.0);
+        vec3 le;   // emission seen directly
+        GpuMaterial m;
+        Shading sh;
+        if (film_camera_hit(h, o, d, acc, le, m, sh)) {
+            beauty += film_clamp(direct_lighting(sh, m, rng, rays), acc);
+        }
+        beauty += le;
+        film_add(acc, sample_index, beauty, le);
+    }
+    acc.beauty_sq.w += float(rays);
+    film[pixel] = acc;
+}

@@ -1,0 +1,153 @@
+// The samplers of the infinite lights (light_sampling.glsl states the conventions and what each
+// sampler does): the sun's cone and the dome's map, each with its *_hit() of a direction.
+#ifndef ILLUM_INFINITE_LIGHTS_GLSL
+#define ILLUM_INFINITE_LIGHTS_GLSL
+
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference2 : require
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+#include "shared/layout.glsl"
+#include "shared/common.glsl"
+#include "scene/features.glsl"
+#include "lights/dome_map.glsl"
+#include "lights/light_sample.glsl"
+
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeCdfRef { float v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeGuideRef { uvec2 v[]; };
+
+// ---------------------------------------------------------------------------------------------
+// Sun
+
+LightSample sample_sun(GpuLight l, vec2 u) {
+    LightSample s = no_light_sample();
+    vec3 d = l.p0.xyz;
+    float om = l.p1.x;
+    s.dist = INF;
+    s.n = -d;
+    if (om <= 0.0) {
+        s.wi = d;
+        s.pdf = 1.0;
+        s.delta = true;
+        return s;
+    }
+    float omc = u.x * om;
+    float st = sqrt(max(0.0, omc * (2.0 - omc)));
+    float phi = 2.0 * PI * u.y;
+    vec3 t, b;
+    make_basis(d, t, b);
+    s.wi = normalize(st * cos(phi) * t + st * sin(phi) * b + (1.0 - omc) * d);
+    s.pdf = 1.0 / (2.0 * PI * om);
+    return s;
+}
+
+LightHit sun_hit(GpuLight l, vec3 w) {
+    LightHit h = light_miss();
+    float om = l.p1.x;
+    if (om <= 0.0) return h;   // a delta light is never hit by a BRDF sample
+    if (!in_cone(w, l.p0.xyz, om)) return h;
+    h.n = -l.p0.xyz;
+    h.pdf = 1.0 / (2.0 * PI * om);
+    return h;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dome
+
+// Index i with cdf[i] <= u < cdf[i + 1] among n intervals (cdf[0] = 0, cdf[n] = 1, non-decreasing);
+// only intervals of positive width can be returned for u in [0, 1). The guide (one uvec2 per bucket
+// of width 1/n in u, src/gpu_scene/dome.rs) bounds the binary search to the few intervals that
+// bucket can reach: it returns the same index as a search over all n, in O(1) expected steps.
+uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n, float u) {
+    uvec2 r = guide.v[gbase + min(uint(u * float(n)), n - 1u)];
+    uint lo = r.x, hi = r.y;   // invariant: cdf[lo] <= u < cdf[hi] (cdf[n] = 1 > u)
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) >> 1u;
+        if (cdf.v[base + mid] <= u) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+// The table's density at direction w of map coordinates uv (0 where it gives none).
+float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
+    uint W = ds.width, H = ds.height;
+    float cu = uv.x - dome_cell_offset(l, W);
+    if (cu < 0.0) cu += 1.0;
+    uint i = min(uint(max(cu, 0.0) * float(W)), W - 1u);
+    uint j = min(uint(max(uv.y, 0.0) * float(H)), H - 1u);
+    DomeCdfRef marg = DomeCdfRef(ds.marginal);
+    DomeCdfRef cond = DomeCdfRef(ds.conditional);
+    uint base = j * (W + 1u);
+    float pm = marg.v[j + 1u] - marg.v[j];
+    float pc = cond.v[base + i + 1u] - cond.v[base + i];
+    float jacobian = dome_jacobian(l, w);
+    if (!(jacobian > 0.0)) return 0.0;
+    return pm * pc * float(W * H) / jacobian;
+}
+
+// The defensive mixture's density from the table's (see the header).
+float dome_mix_pdf(GpuDomeSampling ds, float table_pdf) {
+    return ds.defensive > 0.0 ? ds.defensive / (4.0 * PI) + (1.0 - ds.defensive) * table_pdf : table_pdf;
+}
+
+LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
+    LightSample s = no_light_sample();
+    s.dist = INF;
+    if (ds.width == 0u) {
+        s.wi = uniform_sphere(u);
+        s.n = -s.wi;
+        s.uv = dome_uv(l, s.wi);
+        s.pdf = 1.0 / (4.0 * PI);
+        return s;
+    }
+    if (ds.defensive > 0.0) {
+        if (u.x < ds.defensive) {
+            s.wi = uniform_sphere(vec2(u.x / ds.defensive, u.y));
+            s.n = -s.wi;
+            s.uv = dome_uv(l, s.wi);
+            s.pdf = dome_mix_pdf(ds, dome_table_pdf(l, ds, s.wi, s.uv));
+            return s;
+        }
+        u.x = (u.x - ds.defensive) / (1.0 - ds.defensive);
+    }
+    uint W = ds.width, H = ds.height;
+    float ux = min(u.x, 0.99999994);
+    float uy = min(u.y, 0.99999994);
+    DomeCdfRef marg = DomeCdfRef(ds.marginal);
+    DomeCdfRef cond = DomeCdfRef(ds.conditional);
+    // The guides follow the conditional CDFs: H buckets of the marginal, then W per row.
+    DomeGuideRef guide = DomeGuideRef(ds.conditional + 4ul * uint64_t(H * (W + 1u)));
+    uint j = cdf_find(marg, 0u, guide, 0u, H, ux);
+    float m0 = marg.v[j], m1 = marg.v[j + 1u];
+    uint base = j * (W + 1u);
+    uint i = cdf_find(cond, base, guide, H + j * W, W, uy);
+    float c0 = cond.v[base + i], c1 = cond.v[base + i + 1u];
+    float pm = m1 - m0, pc = c1 - c0;
+    if (!(pm > 0.0) || !(pc > 0.0)) return s;
+    float fy = clamp((ux - m0) / pm, 0.0, 1.0);
+    float fx = clamp((uy - c0) / pc, 0.0, 1.0);
+    vec2 uv = vec2((float(i) + fx) / float(W) + dome_cell_offset(l, W), (float(j) + fy) / float(H));
+    if (uv.x >= 1.0) uv.x -= 1.0;
+    float jacobian;
+    s.wi = dome_direction(l, uv, jacobian);
+    if (!(jacobian > 0.0)) return s;
+    s.n = -s.wi;
+    s.uv = uv;
+    s.pdf = dome_mix_pdf(ds, pm * pc * float(W * H) / jacobian);
+    return s;
+}
+
+LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 w) {
+    LightHit h = light_miss();
+    h.n = -w;
+    h.uv = dome_uv(l, w);
+    if (ds.width == 0u) {
+        h.pdf = 1.0 / (4.0 * PI);
+        return h;
+    }
+    h.pdf = dome_mix_pdf(ds, dome_table_pdf(l, ds, w, h.uv));
+    return h;
+}
+
+#endif
