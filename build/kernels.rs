@@ -115,7 +115,9 @@ pub fn compile(
                 resolved_name: path.to_string_lossy().into_owned(),
                 content,
             }),
-            Err(e) => Err(format!("{from}: include \"{name}\" (a path from glsl/): {e}")),
+            Err(e) => Err(format!(
+                "{from}: include \"{name}\" (a path from glsl/): {e}"
+            )),
         }
     });
     let file = path.to_string_lossy();
@@ -162,7 +164,10 @@ pub fn check_pieces(glsl: &Path, sources: &[PathBuf]) {
         .map(|name| (name.clone(), kernel(&mut std::iter::once(name))))
         .collect();
     cases.push(("every piece".into(), kernel(&mut pieces.iter())));
-    cases.push(("every piece, reversed".into(), kernel(&mut pieces.iter().rev())));
+    cases.push((
+        "every piece, reversed".into(),
+        kernel(&mut pieces.iter().rev()),
+    ));
     let mut failures = Vec::new();
     for (variant, defines) in VARIANT_DEFINES.iter().filter(|(n, _)| *n != "plain") {
         for (what, text) in &cases {

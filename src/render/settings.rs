@@ -67,7 +67,7 @@ impl IntegratorKind {
 }
 
 /// How light samples pick lights when a scene has more than DIRECT_LOOP_LIGHTS of them
-/// (glsl/direct/direct.glsl).
+/// (glsl/lights/light_select.glsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSelection {
     /// Descend the light tree (docs/techniques.md, "The light tree"): O(log n) per sample.
@@ -118,7 +118,7 @@ impl std::str::FromStr for LightSelection {
 }
 
 /// Control variates for the diffuse light samples of the looped lights (docs/techniques.md,
-/// "Control variates"; glsl/direct/direct.glsl): the analytic unshadowed irradiance scaled by a
+/// "Control variates"; glsl/direct/control_variates.glsl): the analytic unshadowed irradiance scaled by a
 /// visibility estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ControlVariates {

@@ -8,7 +8,7 @@
 //!   vertices gathered in leaf order (no index indirection at trace time), and the top-level
 //!   leaves; the kernels reach them through buffer device addresses held in a small uniform
 //!   buffer at `BINDING_BVH`, so no binding limit (128 MiB on lavapipe) applies.
-//! - Traversal: glsl/shared/trace_bvh.glsl.
+//! - Traversal: glsl/trace/bvh.glsl.
 //!
 //! # Why this layout: measurements
 //!
