@@ -1,4 +1,4 @@
-//! Control variates (glsl/direct/direct.glsl; docs/techniques.md, "Control variates"): `avgvis`
+//! Control variates (glsl/direct/control_variates.glsl; docs/techniques.md, "Control variates"): `avgvis`
 //! and `loo`.
 //!
 //! * Zero variance: a diffuse plane fully lit by a huge rect, disk, sphere or triangle light, a

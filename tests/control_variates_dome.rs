@@ -1,4 +1,4 @@
-//! Control variates of the dome (glsl/direct/direct.glsl; docs/techniques.md,
+//! Control variates of the dome (glsl/direct/control_variates.glsl; docs/techniques.md,
 //! "Control variates", condition 2, and "Analytic unshadowed irradiance"): the
 //! control radiance is the map's SH9 projection L_SH (src/gpu_scene/dome_sh.rs), G its SH9
 //! irradiance, and the dome's sampler mixes in a uniform share so that its pdf is positive where

@@ -78,7 +78,7 @@ fn dome_case(
         light: l,
         p: [0.0; 4],
     };
-    // The uniform share that control variates mix in (glsl/lights/light_sampling.glsl).
+    // The uniform share that control variates mix in (glsl/lights/infinite_lights.glsl).
     prm.dome.defensive = defensive;
     let a = f64::from(defensive);
     let (w, h) = (tex.width, tex.height);

@@ -1,4 +1,4 @@
-//! Fewer shadow rays (glsl/direct/direct.glsl; docs/techniques.md, "Shadow resampling" and
+//! Fewer shadow rays (glsl/direct/shadow.glsl; docs/techniques.md, "Shadow resampling" and
 //! "Shadow culling"): resampled shadow rays (`shadow_resample`) and Russian roulette on each candidate
 //! (`shadow_cull`) against the plain estimator, on a floor in the penumbra of a sphere under a
 //! large rect light.

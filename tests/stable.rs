@@ -1,13 +1,13 @@
 //! The numerically stable helpers of glsl/shared/ at their extremes (tests/kernels/stable_check.comp),
 //! against float64 references computed here from the same float32 inputs:
-//! * sphere light (light_sampling.glsl sample_sphere / light_pdf): the stable 1 - cos(theta_max)
+//! * sphere light (sample_sphere in lights/area_lights.glsl, light_pdf): the stable 1 - cos(theta_max)
 //!   through pdf = 1 / (2 pi (1 - cos theta_max)) for r/d from 1e-8 to 0.999 (docs/techniques.md,
 //!   "Sphere lights" and "Stable cones and solid angles"), and the sample distance;
 //! * rect_solid_angle (two Van Oosterom–Strackee triangles with the triple product from the
 //!   light's edges, "Stable cones and solid angles") for tiny, far, huge and oblique rects;
-//! * intersect_sphere (shapes.glsl, Haines et al. 2019, "Ray-sphere intersection") for a unit
+//! * intersect_sphere (trace/shapes.glsl, Haines et al. 2019, "Ray-sphere intersection") for a unit
 //!   sphere 1e4 away and from 1 unit above a sphere of radius 1e4;
-//! * offset_ray_origin (common.glsl, Waechter & Binder 2019, "Ray offsets") at |p| ~ 1e5, at mixed
+//! * offset_ray_origin (shared/common.glsl, Waechter & Binder 2019, "Ray offsets") at |p| ~ 1e5, at mixed
 //!   magnitudes and near the origin: the origin moves to the normal's side, by little, and rays
 //!   leaving the surface (down to grazing, n.d = 1e-4) never re-hit their own rect or disk;
 //! * the sun's cone sampler (sample_sun / light_pdf, "Sun lights") for angular radii from 1e-4 degree

@@ -118,32 +118,39 @@ vec2 stratify(vec2 u, uint i, uint n, uint shift, bool rows) {
 // Whether light l's samples take stratify()'s rows: a dome with sampling tables (a textured one).
 bool stratify_rows(GpuLight l, GpuDomeSampling dome) { return l.kind == LIGHT_DOME && dome.width > 0u; }
 
-// Light sample i of the `count` of light l (looped or picked, n_l its expected count): its
-// candidate, or with a control variate (cv) its ray and g_j (in cv_tr and the ray's s).
-void direct_light_sample(Shading sh, GpuMaterial m, GpuLight l, GpuDomeSampling dome, float n_l, bool cv,
-                         uint i, uint count, uint shift, inout float cv_tr, inout ShadowGroup group,
-                         inout ShadowRay ray, inout Rng rng) {
-    uint technique = frame.technique;
-    bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
-    vec2 u = rng_next2(rng);
-    LightSample ls = sample_light(l, dome, sh.p, cv ? u : stratify(u, i, count, shift, stratify_rows(l, dome)));
-    if (!(ls.pdf > 0.0)) return;
-    vec3 le = light_radiance(l, ls.uv, ls.delta);
-    vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, technique, diffuse_mis, frame.brdf_samples);
-    // Divide by the expected count n_l (many lights: the selection probability is in it).
-    vec3 c = f * le / (ls.pdf * n_l);
-    if (cv) {
-        // g_j / (rho Lc(w_j) / pi), zero exactly where eval_lobes (and so c) is. V_j is the
-        // ray's answer, also where c is 0 (a black texel): V_j must not depend on L.
-        float cs = dot(sh.n, ls.wi);
-        float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
-        if (s > 0.0) {
-            cv_tr += 1.0;
-            shadow_ray(ray, ls.wi, ls.dist, c, s, false);
-        }
-    } else {
-        shadow_candidate(group, ray, ls.wi, ls.dist, c, rng);
-    }
+// What every sample of one direct_lighting() call shares: the settings, the dome's tables, the
+// light selection and the groups' layout. Samples come in groups, in this order: the light
+// samples of each round (a looped light, or one pick from the tree or the scan), a closing group
+// (the picks' resampling), then the BRDF samples of each lobe (the specular ones, then the diffuse
+// lobe where it is BRDF-sampled).
+struct DirectPlan {
+    uint technique;
+    uint n_max;            // most light samples per light
+    uint n_b;              // BRDF samples per lobe
+    bool diffuse_mis;
+    GpuDomeSampling dome;
+    LightSelection sel;
+    uint looped;           // light rounds that loop over a light; each later one picks a light
+    uint rounds;           // light rounds
+    uint lobes;            // specular lobes (BRDF group `lobes` is the diffuse lobe)
+    bool diffuse_brdf;     // whether the diffuse lobe takes BRDF samples
+    uint groups;
+};
+
+DirectPlan direct_plan(Shading sh, GpuMaterial m) {
+    DirectPlan plan;
+    plan.technique = frame.technique;
+    plan.n_max = frame.light_samples;
+    plan.n_b = frame.brdf_samples;
+    plan.diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
+    plan.dome = dome_sampling();
+    plan.sel = light_selection(sh.p, sh.n);
+    plan.looped = looped_lights(plan.sel);
+    plan.rounds = plan.technique == TECHNIQUE_BRDF ? 0u : plan.looped + (lights_picked(plan.sel) ? plan.n_max : 0u);
+    plan.lobes = min(m.lobe_count, 2u);
+    plan.diffuse_brdf = plan.technique == TECHNIQUE_BRDF || plan.diffuse_mis;
+    plan.groups = plan.rounds + 1u + (plan.technique == TECHNIQUE_LIGHT ? 0u : plan.lobes + 1u);
+    return plan;
 }
 
 // A BRDF sample's direction, shared by every light it crosses.
@@ -152,6 +159,107 @@ struct BrdfDir {
     float pdf;
     bool delta;
 };
+
+// The group being worked through and where it stands.
+struct DirectGroup {
+    uint g;              // its index
+    bool opened;         // whether direct_open() has run for it
+    uint j, count;       // the next sample, and its samples (0: none)
+    uint shift;          // a textured dome's column order (stratify)
+    bool close;          // whether it ends with shadow_group_end
+    bool closed;         // whether its closing flush has started
+    GpuLight l;          // a light round's light
+    float n_l;           // its expected samples per shading point
+    bool cv;             // with a control variate, whose sums (control_variate) follow
+    vec3 cv_sv, cv_so;
+    float cv_vis, cv_tr;
+    BrdfDir bdir;        // a BRDF sample's direction; of the lights it crosses, q are done
+    uint crossed, q;
+};
+
+// A light round: its light, looped over or picked (select_light()), its sample count, control
+// variate and, for a textured dome, its column order.
+void direct_open_light_round(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng rng) {
+    uint li;
+    bool picked = grp.g >= plan.looped;
+    bool reached = true;
+    if (picked) reached = select_light(plan.sel, sh.p, sh.n, float(plan.n_max), rng, li, grp.n_l);
+    else li = looped_light(plan.sel, grp.g);
+    if (reached) {
+        grp.l = light_seen_from(sh, li);
+        reached = light_reaches(grp.l);
+    }
+    if (!reached) return;
+    grp.count = picked ? 1u : light_count_for(grp.l, sh.p, plan.n_max);
+    if (!picked) grp.n_l = float(grp.count);
+    grp.close = !picked;
+    grp.cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, grp.l, plan.technique, plan.diffuse_mis);
+    // The textured dome's column order (stratify), drawn once per group.
+    if (!grp.cv && grp.count > 1u && stratify_rows(grp.l, plan.dome)) grp.shift = min(uint(rng_next(rng) * float(grp.count)), grp.count - 1u);
+}
+
+// Opens group grp.g: a light round, the closing group, or a lobe's BRDF samples.
+void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng rng) {
+    grp.opened = true;
+    grp.j = 0u;
+    grp.count = 0u;
+    grp.shift = 0u;
+    grp.close = false;
+    grp.cv = false;
+    grp.cv_sv = grp.cv_so = vec3(0.0);
+    grp.cv_vis = grp.cv_tr = 0.0;
+    grp.closed = false;
+    grp.crossed = grp.q = 0u;
+    if (grp.g < plan.rounds) {
+        direct_open_light_round(plan, sh, grp, rng);
+    } else if (grp.g == plan.rounds) {
+        grp.close = plan.technique != TECHNIQUE_BRDF;
+    } else {
+        bool diffuse = grp.g - plan.rounds - 1u == plan.lobes;
+        if (!diffuse || (plan.diffuse_brdf && max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0)) {
+            grp.count = plan.n_b;
+            grp.close = true;
+        }
+    }
+}
+
+// What the loop does next in a group: the next light the BRDF sample crosses, else the next
+// sample, else the closing flush, else the group's end.
+#define DIRECT_CROSS 0u
+#define DIRECT_SAMPLE 1u
+#define DIRECT_CLOSE 2u
+#define DIRECT_END 3u
+
+uint direct_step(DirectGroup grp) {
+    if (grp.q < grp.crossed) return DIRECT_CROSS;
+    if (grp.j < grp.count) return DIRECT_SAMPLE;
+    return grp.closed ? DIRECT_END : DIRECT_CLOSE;
+}
+
+// Light sample j - 1 of the group's light: its candidate, or with a control variate its ray and
+// g_j (in cv_tr and the ray's s).
+ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, inout DirectGroup grp,
+                                    inout ShadowRay ray, inout Rng rng) {
+    GpuLight l = grp.l;
+    float n_l = grp.n_l;
+    vec2 u = rng_next2(rng);
+    LightSample ls = sample_light(l, plan.dome, sh.p, grp.cv ? u : stratify(u, grp.j - 1u, grp.count, grp.shift, stratify_rows(l, plan.dome)));
+    if (!(ls.pdf > 0.0)) return no_shadow_candidate();
+    vec3 le = light_radiance(l, ls.uv, ls.delta);
+    vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, plan.technique, plan.diffuse_mis, plan.n_b);
+    // Divide by the expected count n_l (many lights: the selection probability is in it).
+    vec3 c = f * le / (ls.pdf * n_l);
+    if (!grp.cv) return ShadowCandidate(ls.wi, ls.dist, c, 0.0);
+    // g_j / (rho Lc(w_j) / pi), zero exactly where eval_lobes (and so c) is. V_j is the ray's
+    // answer, also where c is 0 (a black texel): V_j must not depend on L.
+    float cs = dot(sh.n, ls.wi);
+    float s = cs > 0.0 && dot(sh.ng, ls.wi) > 0.0 ? cs / (ls.pdf * n_l) : 0.0;
+    if (s > 0.0) {
+        grp.cv_tr += 1.0;
+        shadow_ray(ray, ls.wi, ls.dist, c, s, false);
+    }
+    return no_shadow_candidate();
+}
 
 // BRDF sample i of the `count` of lobe k (k == lobes: the diffuse lobe), stratified: its direction
 // and the lights it crosses (ids, their count; 0 when the sample is invalid: the pruning, nothing
@@ -174,150 +282,99 @@ uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, uint i, uint count, i
     return lights_along(sh.p, s.wi, ids);
 }
 
-// The candidate of BRDF sample s for light `id` it crosses.
-void direct_brdf_light(Shading sh, GpuDomeSampling dome, LightSelection sel, BrdfDir s, uint id,
-                       inout ShadowGroup group, inout ShadowRay ray, inout Rng rng) {
-    uint technique = frame.technique;
-    uint n_max = frame.light_samples;
-    uint n_b = frame.brdf_samples;
+// The candidate of BRDF sample s for light `id` it crosses, MIS-weighted against that light's
+// samples (light_pmf() for a light reached by picks).
+ShadowCandidate direct_brdf_light(DirectPlan plan, Shading sh, BrdfDir s, uint id) {
     GpuLight l = light_seen_from(sh, id);
-    if (!light_reaches(l)) return;
-    LightHit lh = light_hit(l, dome, sh.p, s.wi);
-    if (!(lh.pdf > 0.0)) return;
+    if (!light_reaches(l)) return no_shadow_candidate();
+    LightHit lh = light_hit(l, plan.dome, sh.p, s.wi);
+    if (!(lh.pdf > 0.0)) return no_shadow_candidate();
     float w = 1.0;
-    if (technique == TECHNIQUE_MIS && !s.delta) {
-        float n_l = light_picked(sel, l)
-            ? light_pmf(sel, sh.p, sh.n, float(n_max), id, l)
-            : float(light_count_for(l, sh.p, n_max));
-        w = mis_power(float(n_b), s.pdf, n_l, lh.pdf);
+    if (plan.technique == TECHNIQUE_MIS && !s.delta) {
+        float n_l = light_picked(plan.sel, l)
+            ? light_pmf(plan.sel, sh.p, sh.n, float(plan.n_max), id, l)
+            : float(light_count_for(l, sh.p, plan.n_max));
+        w = mis_power(float(plan.n_b), s.pdf, n_l, lh.pdf);
     }
-    vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(n_b));
-    shadow_candidate(group, ray, s.wi, lh.t, c, rng);
+    vec3 c = s.weight * light_radiance(l, lh.uv, false) * (w / float(plan.n_b));
+    return ShadowCandidate(s.wi, lh.t, c, 0.0);
 }
 
-// Samples come in groups, in this order: the light samples of each round (a looped light, or one
-// pick from the tree or the scan), a closing group (the picks' resampling), then the BRDF samples
-// of each lobe (specular ones, and the diffuse lobe where it is BRDF-sampled). One loop iteration
-// makes at most one shadow ray (a light sample; a BRDF sample and the first light it crosses, or
-// the next one; a pick of a resampling flush) and traces it: the only call site (shadow.glsl).
-// `rays` counts the shadow rays traced.
-vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) {
-    uint nlights = frame.light_count;
-    if (nlights == 0u) return vec3(0.0);
-    uint technique = frame.technique;
-    uint n_max = frame.light_samples;
-    uint n_b = frame.brdf_samples;
-    bool diffuse_mis = (frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS) != 0u;
-    GpuDomeSampling dome = dome_sampling();
-    LightSelection sel = light_selection(sh.p, sh.n);
-    vec3 result = vec3(0.0);
+// The iteration's shadow ray, traced (the one call site of trace_occluded in direct lighting):
+// its contribution if visible, to the result or the running flush, and a control variate
+// sample's answer.
+void direct_trace(DirectPlan plan, Shading sh, ShadowRay ray, inout DirectGroup grp, inout ShadowGroup group,
+                  inout vec3 result, inout uint rays) {
+    rays += 1u;
+    bool visible = shadow_visible(sh, ray.w, ray.dist);
+    if (ray.cv >= 0.0) {
+        // g_j / (rho / pi): the ray came from this light round's direct_light_sample().
+        vec3 gj = ray.cv * control_radiance(grp.l, plan.dome, ray.w);
+        if (visible) {
+            grp.cv_vis += 1.0;
+            grp.cv_sv += gj;
+        } else {
+            grp.cv_so += gj;
+        }
+    }
+    if (visible && ray.flush) group.part += ray.c;
+    else if (visible) result += ray.c;
+}
 
-    // The looped lights, then n_max picks (light_select.glsl).
-    uint looped = looped_lights(sel);
-    uint rounds = technique == TECHNIQUE_BRDF ? 0u : looped + (lights_picked(sel) ? n_max : 0u);
-    uint lobes = min(m.lobe_count, 2u);
-    bool diffuse_brdf = technique == TECHNIQUE_BRDF || diffuse_mis;
-    uint groups = rounds + 1u + (technique == TECHNIQUE_LIGHT ? 0u : lobes + 1u);
-    uint g = 0u;          // the group
-    bool opened = false;  // whether g's setup below has run
-    uint j = 0u, count = 0u;   // the next sample of g, and g's samples (0: none)
-    uint shift = 0u;      // a textured dome's column order (stratify)
-    bool close = false;   // whether g ends with shadow_group_end
-    GpuLight l;           // a light round's light
-    float n_l = 0.0;      // its expected samples per shading point
-    bool cv = false;      // with a control variate
-    vec3 cv_sv = vec3(0.0), cv_so = vec3(0.0);
-    float cv_vis = 0.0, cv_tr = 0.0;
-    bool closed = false;  // whether g's closing flush has started
-    BrdfDir bdir;         // a BRDF sample's direction, and the lights it crosses still to do
-    uint ids[DIRECT_MAX_CROSSED];
-    uint crossed = 0u, q = 0u;
+// One loop iteration opens the group if need be, then makes at most one shadow ray (a light
+// sample; a BRDF sample and the first light it crosses, or the next one; a pick of a resampling
+// flush) and traces it (direct_trace): one traversal for the driver to compile. `rays` counts the
+// shadow rays traced.
+vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) {
+    if (frame.light_count == 0u) return vec3(0.0);
+    DirectPlan plan = direct_plan(sh, m);
+    vec3 result = vec3(0.0);
+    DirectGroup grp;
+    grp.g = 0u;
+    grp.opened = false;
+    grp.n_l = 0.0;
+    uint ids[DIRECT_MAX_CROSSED];                 // the lights the BRDF sample crosses
+    ShadowCandidate cands[SHADOW_GROUP_MAX];      // the resampling group's waiting candidates
     ShadowGroup group = shadow_group();
     ShadowRay ray;
-    while (g < groups) {
-        if (!opened) {
-            opened = true;
-            j = 0u;
-            count = 0u;
-            shift = 0u;
-            close = false;
-            cv = false;
-            cv_sv = cv_so = vec3(0.0);
-            cv_vis = cv_tr = 0.0;
-            closed = false;
-            crossed = q = 0u;
-            if (g < rounds) {
-                uint li;
-                bool picked = g >= looped;
-                bool reached = true;
-                if (picked) reached = select_light(sel, sh.p, sh.n, float(n_max), rng, li, n_l);
-                else li = looped_light(sel, g);
-                if (reached) {
-                    l = light_seen_from(sh, li);
-                    reached = light_reaches(l);
-                }
-                if (reached) {
-                    count = picked ? 1u : light_count_for(l, sh.p, n_max);
-                    if (!picked) n_l = float(count);
-                    close = !picked;
-                    cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, l, technique, diffuse_mis);
-                    // The textured dome's column order (stratify), drawn once per group.
-                    if (!cv && count > 1u && stratify_rows(l, dome)) shift = min(uint(rng_next(rng) * float(count)), count - 1u);
-                }
-            } else if (g == rounds) {
-                close = technique != TECHNIQUE_BRDF;
-            } else {
-                bool diffuse = g - rounds - 1u == lobes;
-                if (!diffuse || (diffuse_brdf && max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0)) {
-                    count = n_b;
-                    close = true;
-                }
-            }
-        }
+    while (grp.g < plan.groups) {
+        if (!grp.opened) direct_open(plan, sh, grp, rng);
         ray.on = false;
-        if (group.flushing && !shadow_flush_next(group, ray)) {
+        if (group.flushing && !shadow_flush_next(group, cands, ray)) {
             result += group.part;
-            shadow_flush_done(group);
+            if (shadow_flush_done(group)) cands[group.n++] = group.hold;
         }
         if (!group.flushing) {
-            // The next light a BRDF sample crosses, else the next sample, else the group's end.
-            bool cross = q < crossed;
-            if (!cross && j < count) {
-                j += 1u;
-                if (g < rounds) {
-                    direct_light_sample(sh, m, l, dome, n_l, cv, j - 1u, count, shift, cv_tr, group, ray, rng);
+            ShadowCandidate x = no_shadow_candidate();
+            uint step = direct_step(grp);
+            if (step == DIRECT_SAMPLE) {
+                grp.j += 1u;
+                if (grp.g < plan.rounds) {
+                    x = direct_light_sample(plan, sh, m, grp, ray, rng);
                 } else {
-                    crossed = direct_brdf_sample(sh, m, g - rounds - 1u, j - 1u, count, rng, bdir, ids);
-                    q = 0u;
-                    cross = crossed > 0u;
+                    grp.crossed = direct_brdf_sample(sh, m, grp.g - plan.rounds - 1u, grp.j - 1u, grp.count, rng, grp.bdir, ids);
+                    grp.q = 0u;
+                    if (grp.crossed > 0u) step = DIRECT_CROSS;
                 }
-            } else if (!cross && !closed) {
-                closed = true;
-                if (close) shadow_group_end(group, rng);
-            } else if (!cross) {
-                if (cv) result += control_variate(sh, l, dome, float(count), cv_sv, cv_so, cv_vis, cv_tr);
-                g += 1u;
-                opened = false;
+            } else if (step == DIRECT_CLOSE) {
+                grp.closed = true;
+                if (grp.close) shadow_group_end(group, cands, rng);
+            } else if (step == DIRECT_END) {
+                if (grp.cv) result += control_variate(sh, grp.l, plan.dome, float(grp.count), grp.cv_sv, grp.cv_so, grp.cv_vis, grp.cv_tr);
+                grp.g += 1u;
+                grp.opened = false;
             }
-            if (cross) direct_brdf_light(sh, dome, sel, bdir, ids[q++], group, ray, rng);
-        }
-        if (ray.on) {
-            // The one shadow-ray call site.
-            rays += 1u;
-            bool visible = shadow_visible(sh, ray.w, ray.dist);
-            if (ray.cv >= 0.0) {
-                // g_j / (rho / pi): the ray came from this light round's direct_light_sample().
-                vec3 gj = ray.cv * control_radiance(l, dome, ray.w);
-                if (visible) {
-                    cv_vis += 1.0;
-                    cv_sv += gj;
-                } else {
-                    cv_so += gj;
-                }
+            if (step == DIRECT_CROSS) x = direct_brdf_light(plan, sh, grp.bdir, ids[grp.q++]);
+            uint joins = shadow_candidate(ray, x, group.n, rng);
+            if (joins == SHADOW_FULL) {
+                shadow_flush_start(group, cands, rng);
+                group.held = true;
+                group.hold = x;
+            } else if (joins == SHADOW_JOIN) {
+                cands[group.n++] = x;
             }
-            if (visible && ray.flush) group.part += ray.c;
-            else if (visible) result += ray.c;
         }
+        if (ray.on) direct_trace(plan, sh, ray, grp, group, result, rays);
     }
     return result;
 }

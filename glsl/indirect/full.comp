@@ -57,227 +57,307 @@ layout(buffer_reference, scalar, buffer_reference_align = 8) writeonly buffer Re
 #define RAY_DIFFUSE 2u  // its hit is a vertex of the diffuse chain
 #define RAY_NEXT 3u     // update: the diffuse chain's first ray, whose hit is also vertex v + 1
 
-void main() {
-    bool update = pc.mode == FULL_PASS_UPDATE;
-    uvec3 id = gl_GlobalInvocationID;
-    // Film: the pixel and its sums. Update: the path and its records.
+// The invocation's pixel (film pass) or path (update pass).
+struct FullPixel {
     uvec2 pix;
     uint pixel;
-    FilmPixel acc;
+    FilmPixel acc;       // its sums and AOV planes, as read from the film
     vec4 a_direct, a_indirect, a_reflection;
-    RecordRef records = RecordRef(pc.update.records);
-    uint path, base;
+    uint path;           // update: the path, and the index of its first record
+    uint base;
+};
+
+// The invocation's pixel and its sums, or its path with its records cleared; false when it has
+// none (outside the tile, or beyond the blocks).
+bool full_begin(bool update, out FullPixel px) {
+    uvec3 id = gl_GlobalInvocationID;
     if (update) {
         uint block = pc.update.block;
         uvec2 blocks = (uvec2(frame.width, frame.height) + block - 1u) / block;
-        if (id.x >= blocks.x || id.y >= blocks.y) return;
-        path = id.y * blocks.x + id.x;
-        base = (id.z * blocks.x * blocks.y + path) * pc.update.vertices;
+        if (id.x >= blocks.x || id.y >= blocks.y) return false;
+        px.path = id.y * blocks.x + id.x;
+        px.base = (id.z * blocks.x * blocks.y + px.path) * pc.update.vertices;
         RadiosityRecord none;
         none.value = vec3(0.0);
         none.valid = 0u;
         none.keys[0] = none.keys[1] = uvec2(0u);
-        for (uint v = 0u; v < pc.update.vertices; ++v) records.v[base + v] = none;
-    } else {
-        if (id.x >= pc.film.tile.z || id.y >= pc.film.tile.w) return;
-        pix = id.xy + pc.film.tile.xy;
-        pixel = pix.y * frame.width + pix.x;
-        acc = film[pixel];
-        a_direct = aovs[pixel * AOV_PLANES + AOV_DIRECT];
-        a_indirect = aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
-        a_reflection = aovs[pixel * AOV_PLANES + AOV_REFLECTION];
+        RecordRef records = RecordRef(pc.update.records);
+        for (uint v = 0u; v < pc.update.vertices; ++v) records.v[px.base + v] = none;
+        return true;
     }
+    if (id.x >= pc.film.tile.z || id.y >= pc.film.tile.w) return false;
+    px.pix = id.xy + pc.film.tile.xy;
+    px.pixel = px.pix.y * frame.width + px.pix.x;
+    px.acc = film[px.pixel];
+    px.a_direct = aovs[px.pixel * AOV_PLANES + AOV_DIRECT];
+    px.a_indirect = aovs[px.pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
+    px.a_reflection = aovs[px.pixel * AOV_PLANES + AOV_REFLECTION];
+    return true;
+}
+
+// A camera sample's path through the loop: the ray to trace and what its hit is, the path vertex
+// whose indirect diffuse is being gathered, the reflection chain (film), the cones and the next
+// vertex (update), the diffuse chain, and what this iteration does with its hit.
+struct FullPath {
+    vec3 o, d;
+    uint mask;
+    uint ray;            // RAY_*
+    bool trace;          // false: h is the next vertex's hit, traced already (update)
+    Hit h;
+    vec3 le, direct, indirect;
+    Shading sh;          // the hit's shading (its material is main's m)
+    // The path vertex whose indirect diffuse is being gathered (film: the camera hit, then the
+    // reflected points; update: vertex v; its material is main's m_s) and its direct light.
+    Shading sh_s;
+    vec3 direct_s;
+    // Film: the reflection chain's sum, throughput and depth.
+    bool at_camera;
+    uint depth;
+    vec3 sum_s, thr_s;
+    // Update: the vertex index, ray cones (indirect.glsl), and vertex v + 1's ray and hit.
+    uint v;
+    float angle, width, width_v;
+    Hit next;
+    vec3 o_next, d_next;
+    // The diffuse chain from the path vertex: its sum, throughput and vertex count.
+    vec3 sum_d, thr_d;
+    uint vertex_d;
+    // This iteration: direct lighting at the hit (of its diffuse lobe only), the end of the
+    // diffuse chain, a BRDF-sampled bounce from the path vertex.
+    bool shade, diffuse_only, diffuse_over, bounce;
+};
+
+// Sample `sample_index`'s camera ray (update: through a random point of the path's block, from a
+// random stream apart from the camera samples', another seed word) and its path's start.
+FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, out Rng rng) {
+    FullPath p;
+    if (update) {
+        uvec3 id = gl_GlobalInvocationID;
+        uint block = pc.update.block;
+        rng = rng_init(pc.film.seed_lo ^ 0x5bd1e995u, pc.film.seed_hi, px.path, pc.update.index + id.z);
+        vec2 size = vec2(frame.width, frame.height);
+        vec2 film_uv = min(vec2(id.xy * block) + rng_next2(rng) * float(block), size * (1.0 - 1e-6)) / size;
+        p.d = camera_direction(film_uv);
+    } else {
+        p.d = film_camera_ray(pc.film, px.pix, px.pixel, sample_index, rng);
+    }
+    p.o = frame.cam_origin.xyz;
+    p.mask = MASK_GEOMETRY | MASK_LIGHTS;
+    p.ray = RAY_CAMERA;
+    p.trace = true;
+    p.le = p.direct = p.indirect = vec3(0.0);
+    p.direct_s = vec3(0.0);
+    p.at_camera = true;
+    p.depth = 0u;
+    p.sum_s = vec3(0.0);
+    p.thr_s = vec3(1.0);
+    p.v = 0u;
+    p.angle = pixel_spread();
+    p.width = p.width_v = 0.0;
+    p.o_next = p.o;
+    p.d_next = p.d;
+    p.sum_d = vec3(0.0);
+    p.thr_d = vec3(1.0);
+    p.vertex_d = 0u;
+    return p;
+}
+
+// A hit of the diffuse chain (RAY_DIFFUSE, RAY_NEXT): the cached value where the segment is
+// longer than the cell, else direct lighting of its diffuse lobe in place; or the chain's end.
+void full_diffuse_hit(bool cache, bool material, inout FullPath p, inout Rng rng) {
+    if (p.ray == RAY_NEXT) {
+        p.next = p.h;
+        p.o_next = p.o;
+        p.d_next = p.d;
+    }
+    p.diffuse_over = true;
+    if (!(material && p.vertex_d < RADIOSITY_BRUTE_MAX && max3(p.sh.albedo) > 0.0)) return;
+    float w = p.h.t * frame.diffuse_spread;
+    vec3 b;
+    if (cache && p.h.t > radiosity_cell_size(radiosity_level(w)) && radiosity_lookup(p.sh, w, rng, b)) {
+        p.sum_d += p.thr_d * b;
+    } else {
+        p.diffuse_only = true;
+        p.shade = true;
+        p.diffuse_over = false;
+    }
+}
+
+// What this iteration does with its hit (surface s, with a material or not), by the kind of ray:
+// false where the path ends. The film's camera hit records its AOVs; the update pass's takes the
+// first bounce.
+bool full_visit(bool update, bool cache, Surface s, bool material, inout FullPath p, inout FilmPixel acc,
+                inout Rng rng) {
+    p.shade = p.diffuse_only = p.diffuse_over = p.bounce = false;
+    if (p.ray == RAY_CAMERA && !update) {
+        film_camera_aovs(p.h, s, material, p.sh, p.d, acc, p.le);
+        p.shade = material;
+        return material;
+    }
+    if (p.ray == RAY_CAMERA) {
+        // Update: the first bounce, from either lobe.
+        if (!material) return false;
+        p.width = p.h.t * p.angle;
+        p.sh_s = p.sh;
+        p.bounce = true;
+    } else if (p.ray == RAY_VERTEX) {
+        if (update) {
+            if (p.v >= pc.update.vertices || p.h.kind == HIT_NONE) return false;
+            p.width += p.h.t * p.angle;
+            if (!material || !(max3(p.sh.albedo) > 0.0)) return false;
+            p.diffuse_only = true;   // B of the diffuse lobe
+        }
+        if (!material) return false;
+        p.shade = true;
+    } else {
+        full_diffuse_hit(cache, material, p, rng);
+    }
+    return true;
+}
+
+// A path vertex, lit (dl): its direct light, then its diffuse chain's first ray.
+void full_path_vertex(bool update, vec3 dl, inout FullPath p, inout FilmPixel acc, inout Rng rng) {
+    if (update) {
+        p.width_v = p.width;
+        p.next.kind = HIT_NONE;
+    }
+    if (p.ray == RAY_CAMERA) p.direct = film_clamp(dl, acc);
+    else p.direct_s = dl;
+    p.sh_s = p.sh;
+    p.sum_d = vec3(0.0);
+    p.thr_d = vec3(1.0);
+    p.vertex_d = 0u;
+    p.diffuse_over = true;
+    if (max3(p.sh.albedo) > 0.0) p.diffuse_over = !diffuse_direction(p.sh, rng, p.d);
+    p.ray = update ? RAY_NEXT : RAY_DIFFUSE;
+}
+
+// Update: vertex v is complete, its record written; the path goes on to the next vertex, whose hit
+// the chain's first ray found.
+void full_record(inout FullPath p, uint base) {
+    vec3 value = p.direct_s;
+    if (p.next.kind != HIT_NONE) value += p.sh_s.albedo * p.sum_d;
+    RadiosityRecord r;
+    r.value = value;
+    r.valid = non_finite(value) ? 0u : 1u;
+    uint level = radiosity_level(p.width_v);
+    for (uint i = 0u; i < RADIOSITY_RECORD_KEYS; ++i)
+        r.keys[i] = radiosity_key(p.sh_s.p, p.sh_s.ng, radiosity_record_level(level, i));
+    RecordRef(pc.update.records).v[base + p.v] = r;
+    p.v += 1u;
+    p.o = p.o_next;
+    p.d = p.d_next;
+    p.h = p.next;
+    p.trace = false;
+    p.ray = RAY_VERTEX;
+    p.angle = frame.diffuse_spread;
+    p.width = 0.0;
+}
+
+// Film: back at the path vertex, its indirect diffuse, then the next reflection (false: the
+// reflection chain is as deep as it may be).
+bool full_gather(inout FullPath p) {
+    vec3 ind = p.sh_s.albedo * p.sum_d;
+    if (p.at_camera) {
+        p.indirect = ind;
+        p.at_camera = false;
+    } else {
+        p.sum_s += p.thr_s * (p.direct_s + ind);
+        p.depth += 1u;
+    }
+    if (p.depth >= frame.specular_depth) return false;
+    p.bounce = true;
+    return true;
+}
+
+// A BRDF-sampled bounce from the path vertex (material m_s): the reflection chain's throughput,
+// or the update pass's cone (as the film pass's, indirect.glsl: a diffuse bounce starts a new one).
+bool full_bounce(bool update, GpuMaterial m_s, inout FullPath p, inout Rng rng) {
+    Bounce b = sample_bounce(p.sh_s, m_s, update, true, rng);
+    if (!b.valid) return false;
+    if (!update) {
+        p.thr_s *= b.weight;
+    } else if (b.diffuse) {
+        p.angle = b.spread;
+        p.width = 0.0;
+    } else {
+        p.angle += b.spread;
+    }
+    p.d = b.wi;
+    p.ray = RAY_VERTEX;
+    return true;
+}
+
+// Film: the sample's beauty and AOV planes.
+void full_add_sample(inout FullPixel px, uint sample_index, FullPath p) {
+    vec3 le = p.le, direct = p.direct, indirect = p.indirect, reflected = p.sum_s;
+    vec3 beauty = le + direct + indirect + reflected;
+    if (!film_add(px.acc, sample_index, beauty, le)) le = direct = indirect = reflected = vec3(0.0);
+    px.a_direct.rgb += le + direct;
+    px.a_indirect.rgb += indirect;
+    px.a_reflection.rgb += reflected;
+}
+
+void main() {
+    bool update = pc.mode == FULL_PASS_UPDATE;
+    FullPixel px;
+    if (!full_begin(update, px)) return;
     bool cache = radiosity_cache_on();
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint count = update ? 1u : pc.film.sample_count;
     for (uint k = 0u; k < count; ++k) {
         uint sample_index = pc.film.first_sample + k;
         Rng rng;
-        vec3 d;
-        if (update) {
-            // A random stream apart from the camera samples' (another seed word).
-            uint block = pc.update.block;
-            rng = rng_init(pc.film.seed_lo ^ 0x5bd1e995u, pc.film.seed_hi, path, pc.update.index + id.z);
-            vec2 size = vec2(frame.width, frame.height);
-            vec2 film_uv = min(vec2(id.xy * block) + rng_next2(rng) * float(block), size * (1.0 - 1e-6)) / size;
-            d = camera_direction(film_uv);
-        } else {
-            d = film_camera_ray(pc.film, pix, pixel, sample_index, rng);
-        }
-        vec3 o = frame.cam_origin.xyz;
-        uint mask = MASK_GEOMETRY | MASK_LIGHTS;
-        uint ray = RAY_CAMERA;
-        bool trace = true;   // false: h is the next vertex's hit, traced already (update)
-        Hit h;
-        vec3 le = vec3(0.0), direct = vec3(0.0), indirect = vec3(0.0);
-        GpuMaterial m;
-        Shading sh;
-        // The path vertex whose indirect diffuse is being gathered (film: the camera hit, then
-        // the reflected points; update: vertex v) and its direct light.
-        Shading sh_s;
-        GpuMaterial m_s;
-        vec3 direct_s = vec3(0.0);
-        // Film: the reflection chain's sum, throughput and depth.
-        bool at_camera = true;
-        uint depth = 0u;
-        vec3 sum_s = vec3(0.0), thr_s = vec3(1.0);
-        // Update: the vertex index, ray cones (indirect.glsl), and vertex v + 1's ray and hit.
-        uint v = 0u;
-        float angle = pixel_spread(), width = 0.0, width_v = 0.0;
-        Hit next;
-        vec3 o_next = o, d_next = d;
-        // The diffuse chain from the path vertex: its sum, throughput and vertex count.
-        vec3 sum_d = vec3(0.0), thr_d = vec3(1.0);
-        uint vertex_d = 0u;
+        FullPath p = full_camera_ray(update, px, sample_index, rng);
+        GpuMaterial m;     // the hit's material
+        GpuMaterial m_s;   // the path vertex's
         for (;;) {
-            if (trace) {
-                h = trace_closest(o, d, 0.0, INF, mask);
+            if (p.trace) {
+                p.h = trace_closest(p.o, p.d, 0.0, INF, p.mask);
                 rays += 1u;
             }
-            trace = true;
-            mask = MASK_OCCLUDERS;
-            bool shade = false;        // direct lighting at (sh, m)
-            bool diffuse_over = false; // the diffuse chain ends here
-            bool bounce = false;       // a BRDF-sampled bounce from (sh_s, m_s) follows
+            p.trace = true;
+            p.mask = MASK_OCCLUDERS;
             // The hit's surface and shading: one copy of that code for every kind of ray.
             Surface s;
             bool material = false;
-            if (h.kind != HIT_NONE) {
-                s = surface_at(h, o, d);
+            if (p.h.kind != HIT_NONE) {
+                s = surface_at(p.h, p.o, p.d);
                 if (s.material != NONE) {
                     m = get_material(s.material);
-                    sh = shading_at(s, m, d);
+                    p.sh = shading_at(s, m, p.d);
                     material = true;
                 }
             }
-            if (ray == RAY_CAMERA && !update) {
-                film_camera_aovs(h, s, material, sh, d, acc, le);
-                if (!material) break;
-                shade = true;
-            } else {
-                if (ray == RAY_CAMERA) {
-                    // Update: the first bounce, from either lobe.
-                    if (!material) break;
-                    width = h.t * angle;
-                    sh_s = sh;
-                    m_s = m;
-                    bounce = true;
-                } else if (ray == RAY_VERTEX) {
-                    if (update) {
-                        if (v >= pc.update.vertices || h.kind == HIT_NONE) break;
-                        width += h.t * angle;
-                        if (!material || !(max3(sh.albedo) > 0.0)) break;
-                        m.lobe_count = 0u;   // B of the diffuse lobe
-                    }
-                    if (!material) break;
-                    shade = true;
-                } else {
-                    if (ray == RAY_NEXT) {
-                        next = h;
-                        o_next = o;
-                        d_next = d;
-                    }
-                    diffuse_over = true;
-                    if (material && vertex_d < RADIOSITY_BRUTE_MAX && max3(sh.albedo) > 0.0) {
-                        // The cached value where the segment is longer than the cell.
-                        float w = h.t * frame.diffuse_spread;
-                        vec3 b;
-                        if (cache && h.t > radiosity_cell_size(radiosity_level(w)) && radiosity_lookup(sh, w, rng, b)) {
-                            sum_d += thr_d * b;
-                        } else {
-                            m.lobe_count = 0u;   // the diffuse lobe only
-                            shade = true;
-                            diffuse_over = false;
-                        }
-                    }
-                }
-            }
-            vec3 dl = shade ? direct_lighting(sh, m, rng, rays) : vec3(0.0);
-            if (shade && ray <= RAY_VERTEX) {
-                // A path vertex: its direct light, then its diffuse chain.
-                if (update) {
-                    width_v = width;
-                    next.kind = HIT_NONE;
-                }
-                if (ray == RAY_CAMERA) direct = film_clamp(dl, acc);
-                else direct_s = dl;
-                sh_s = sh;
-                m_s = m;
-                sum_d = vec3(0.0);
-                thr_d = vec3(1.0);
-                vertex_d = 0u;
-                diffuse_over = true;
-                if (max3(sh.albedo) > 0.0) diffuse_over = !diffuse_direction(sh, rng, d);
-                ray = update ? RAY_NEXT : RAY_DIFFUSE;
-            } else if (shade) {
+            if (!full_visit(update, cache, s, material, p, px.acc, rng)) break;
+            if (p.diffuse_only) m.lobe_count = 0u;
+            vec3 dl = p.shade ? direct_lighting(p.sh, m, rng, rays) : vec3(0.0);
+            // The hit becomes the path vertex where it is lit as one (and at the update pass's
+            // first bounce); else a lit hit is a vertex of the diffuse chain.
+            bool vertex = p.shade && p.ray <= RAY_VERTEX;
+            if (vertex || p.bounce) m_s = m;
+            if (vertex) {
+                full_path_vertex(update, dl, p, px.acc, rng);
+            } else if (p.shade) {
                 // A vertex of the diffuse chain: its direct light, then the next bounce.
-                diffuse_over = !diffuse_chain_next(sh, dl, sum_d, thr_d, vertex_d, rng, d);
-                ray = RAY_DIFFUSE;
+                p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d);
+                p.ray = RAY_DIFFUSE;
             }
-            if (diffuse_over && update) {
-                // Vertex v is complete: its record; then the path goes on to the next vertex,
-                // whose hit the chain's first ray found.
-                vec3 value = direct_s;
-                if (next.kind != HIT_NONE) value += sh_s.albedo * sum_d;
-                RadiosityRecord r;
-                r.value = value;
-                r.valid = non_finite(value) ? 0u : 1u;
-                uint level = radiosity_level(width_v);
-                for (uint i = 0u; i < RADIOSITY_RECORD_KEYS; ++i)
-                    r.keys[i] = radiosity_key(sh_s.p, sh_s.ng, radiosity_record_level(level, i));
-                records.v[base + v] = r;
-                v += 1u;
-                o = o_next;
-                d = d_next;
-                h = next;
-                trace = false;
-                ray = RAY_VERTEX;
-                angle = frame.diffuse_spread;
-                width = 0.0;
+            if (p.diffuse_over && update) {
+                full_record(p, px.base);
                 continue;
             }
-            if (diffuse_over) {
-                // Back at the film's path vertex: its indirect diffuse, then the next reflection.
-                vec3 ind = sh_s.albedo * sum_d;
-                if (at_camera) {
-                    indirect = ind;
-                    at_camera = false;
-                } else {
-                    sum_s += thr_s * (direct_s + ind);
-                    depth += 1u;
-                }
-                if (depth >= frame.specular_depth) break;
-                bounce = true;
-            }
-            if (bounce) {
-                Bounce b = sample_bounce(sh_s, m_s, update, true, rng);
-                if (!b.valid) break;
-                if (!update) {
-                    thr_s *= b.weight;
-                } else if (b.diffuse) {
-                    // Cones as the film pass's (indirect.glsl): a diffuse bounce starts a new one.
-                    angle = b.spread;
-                    width = 0.0;
-                } else {
-                    angle += b.spread;
-                }
-                d = b.wi;
-                ray = RAY_VERTEX;
-            }
-            o = ray == RAY_VERTEX ? sh_s.origin : sh.origin;
+            if (p.diffuse_over && !full_gather(p)) break;
+            if (p.bounce && !full_bounce(update, m_s, p, rng)) break;
+            p.o = p.ray == RAY_VERTEX ? p.sh_s.origin : p.sh.origin;
         }
         if (update) break;
-        vec3 reflected = sum_s;
-        vec3 beauty = le + direct + indirect + reflected;
-        if (!film_add(acc, sample_index, beauty, le)) le = direct = indirect = reflected = vec3(0.0);
-        a_direct.rgb += le + direct;
-        a_indirect.rgb += indirect;
-        a_reflection.rgb += reflected;
+        full_add_sample(px, sample_index, p);
     }
     if (update) return;
-    acc.beauty_sq.w += float(rays);
-    film[pixel] = acc;
-    aovs[pixel * AOV_PLANES + AOV_DIRECT] = a_direct;
-    aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;
-    aovs[pixel * AOV_PLANES + AOV_REFLECTION] = a_reflection;
+    px.acc.beauty_sq.w += float(rays);
+    film[px.pixel] = px.acc;
+    aovs[px.pixel * AOV_PLANES + AOV_DIRECT] = px.a_direct;
+    aovs[px.pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = px.a_indirect;
+    aovs[px.pixel * AOV_PLANES + AOV_REFLECTION] = px.a_reflection;
 }

@@ -47,7 +47,7 @@
 #define FEATURE_MANY_LIGHTS 128
 // Settings, not the scene: shadow rays for a resampled subset of the candidates
 // (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
-// Off, their code is left out of the kernels (glsl/direct/direct.glsl; docs/techniques.md,
+// Off, their code is left out of the kernels (glsl/direct/shadow.glsl; docs/techniques.md,
 // "Shadow resampling", "Shadow culling").
 #define FEATURE_SHADOW_RESAMPLE 256
 #define FEATURE_SHADOW_CULL 512
@@ -329,7 +329,7 @@ struct GpuDomeSampling {
     uint height;
     float integral;        // mean texel weight (sum / (width height)), for diagnostics
     float defensive;       // share of samples drawn uniformly over the sphere (pdf mixed alike);
-                           // 0 in the buffer, set by direct.glsl under control variates
+                           // 0 in the buffer, set by dome_sampling() (lights/lights.glsl) under control variates
     vec4 sh[9];            // xyz: the dome's radiance (colour included) projected on real SH9 in world
                            // directions, order (l, m) = 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22
                            // (src/gpu_scene/dome_sh.rs): the control variate's L_SH
@@ -400,7 +400,7 @@ struct BvhHeader {
 // Four children's boxes, quantized to 8 bits per plane on a grid over the node's own box (one
 // byte per child in each plane word, so that one 64-byte fetch tests all four): child k's box is
 // origin + step * byte k of lo_*/hi_*, step = 2^(byte a of `scale` - 127) along axis a. An unused
-// slot has link NONE. trace_bvh.glsl reads it as 64-bit words by offset: keep the order.
+// slot has link NONE. trace/bvh.glsl reads it as 64-bit words by offset: keep the order.
 struct BvhNode {
     vec3 origin;
     uint scale;
@@ -466,7 +466,7 @@ struct QueryHit {
     uint pad;
 };
 
-// Push constants of glsl/trace_query.comp.
+// Push constants of glsl/trace/trace_query.comp.
 struct QueryConstants {
     uint64_t rays;        // QueryRay array
     uint64_t hits;        // QueryHit array

@@ -1,7 +1,8 @@
 //! The film: per-pixel sums of every plane (FilmPixel's floats, then 4 per AOV plane that the
-//! integrator declares; channel counts, offsets and names generated from glsl/shared/layout.glsl), moved off the device on a fixed grid of sample blocks and accumulated
-//! exactly, so that a render split into jobs (sample ranges, pixel windows) and merged is
-//! bit-identical to the render in one piece.
+//! integrator declares; their count, offsets and names generated from glsl/shared/layout.glsl),
+//! moved off the device on a fixed grid of sample blocks and accumulated exactly, so that a render
+//! split into jobs (sample ranges, pixel windows) and merged is bit-identical to the render in one
+//! piece.
 //!
 //! - Host sums are flat: pixel-major, [`channels`] values a pixel (FilmPixel's members in order,
 //!   then each AOV plane's vec4 from the device's "aovs" buffer, [pixel][plane]).

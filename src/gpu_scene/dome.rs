@@ -1,5 +1,5 @@
 //! Importance-sampling tables of a dome (environment) light's map, read by `sample_dome`/`dome_hit`
-//! in glsl/lights/light_sampling.glsl (docs/techniques.md, "Dome importance sampling"), for each
+//! in glsl/lights/infinite_lights.glsl (docs/techniques.md, "Dome importance sampling"), for each
 //! map convention of glsl/lights/dome_map.glsl.
 //!
 //! The tables cover a grid of cells in map coordinates (u, v), and a cell's weight is the luminance

@@ -1,5 +1,5 @@
 //! The mean radiance of a textured rect, disk or sphere light over its surface: the constant
-//! radiance of its control variate (glsl/direct/direct.glsl; docs/techniques.md,
+//! radiance of its control variate (glsl/direct/control_variates.glsl; docs/techniques.md,
 //! "Control variates", condition 2).
 //!
 //! The mean is taken of what `texture_lookup` returns, under the uv parametrization the light's

@@ -1,5 +1,5 @@
 //! How a dome light's map covers the sphere, per [`DomeConvention`], in f64: the reference that
-//! glsl/lights/dome_map.glsl and the `dome_texture` lookup of glsl/scene/scene.glsl implement, used
+//! glsl/lights/dome_map.glsl and the `dome_texture` lookup of glsl/lights/lights.glsl implement, used
 //! by the closed forms (src/stress/closed_form.rs) and the tests. Map coordinates (u, v) are in
 //! [0, 1]², (0, 0) the top-left corner of the image.
 
