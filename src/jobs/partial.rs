@@ -248,12 +248,17 @@ fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> R
     Ok(info)
 }
 
-/// Reads only the job description of a partial EXR (its header), without its data.
-pub fn read_partial_info(path: &Path) -> Res<PartInfo> {
-    let meta = MetaData::read_from_file(path, false).map_err(|cause| OutputError::ExrRead {
+/// The headers of the EXR at `path`.
+fn read_meta(path: &Path) -> Res<MetaData> {
+    MetaData::read_from_file(path, false).map_err(|cause| OutputError::ExrRead {
         path: path.to_path_buf(),
         cause,
-    })?;
+    })
+}
+
+/// Reads only the job description of a partial EXR (its header), without its data.
+pub fn read_partial_info(path: &Path) -> Res<PartInfo> {
+    let meta = read_meta(path)?;
     let header = meta
         .headers
         .first()
@@ -267,10 +272,7 @@ const MAX_EXPANSION: u64 = 1032;
 /// Refuses a file whose header declares more pixel data than its size can hold, before the
 /// reader allocates it (a flipped size field asked for 240 GB).
 fn check_declared_size(path: &Path) -> Res<()> {
-    let meta = MetaData::read_from_file(path, false).map_err(|cause| OutputError::ExrRead {
-        path: path.to_path_buf(),
-        cause,
-    })?;
+    let meta = read_meta(path)?;
     let len = std::fs::metadata(path)
         .map_err(|cause| OutputError::ExrRead {
             path: path.to_path_buf(),

@@ -37,18 +37,6 @@ impl Params {
         );
     }
 
-    /// Sets every parameter of `other` here (its values win).
-    pub fn extend(&mut self, other: &Params) {
-        for (k, v) in &other.values {
-            self.values.insert(k.clone(), v.clone());
-        }
-    }
-
-    /// The names given.
-    pub fn names(&self) -> impl Iterator<Item = &str> {
-        self.values.keys().map(String::as_str)
-    }
-
     fn take(&self, name: &str) -> Option<&Value> {
         self.read.borrow_mut().push(name.to_string());
         self.values.get(name)
@@ -138,9 +126,8 @@ mod tests {
             e.contains("direct") && e.contains("max_depth (--max-depth)") && !e.contains("n ("),
             "{e}"
         );
-        let mut q = Params::new();
-        q.set("n", "2", "api");
-        p.extend(&q);
+        // A later value of a name replaces the earlier one (options over the scene's section).
+        p.set("n", "2", "api");
         assert_eq!(p.get("n", 0u32), Ok(2));
     }
 }
