@@ -17,7 +17,7 @@ of relMSE from pairs of rounds (pair_relmse: free of the reference's own noise, 
 the renders come near the reference, as on a GPU).
 
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 \\
-      /work/mi-venv/bin/python scripts/compare-mitsuba.py scenes/bench/mitsuba-rect.json \\
+      .mi-venv/bin/python scripts/compare-mitsuba.py scenes/bench/mitsuba-rect.json \\
       --time 5 --rounds 3 --set "default=" --set "1/1 dmis=--light-samples 1 --brdf-samples 1 --diffuse-mis"
 """
 import argparse
