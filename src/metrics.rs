@@ -54,31 +54,30 @@ pub fn compare(image: &[[f32; 3]], reference: &[[f32; 3]]) -> ErrorMetrics {
     }
 }
 
-/// Estimated relMSE of `image` (the mean of `n` samples) from the mean of its even-numbered
-/// samples `even` (ceil(n/2) of them) and of its odd-numbered ones `odd` (floor(n/2)).
+/// Estimated relMSE of `image` (pixel i the mean of `counts[i]` samples) from the mean of its
+/// even-numbered samples `even` (ceil(n/2) of them) and of its odd-numbered ones `odd`
+/// (floor(n/2)).
 ///
 /// With σ² the per-sample variance, Var(even - odd) = σ² (1/n_e + 1/n_o) and Var(image) = σ²/n,
 /// so (even - odd)² / (n (1/n_e + 1/n_o)) is an unbiased estimate of the pixel's squared error
 /// when the renderer is unbiased. The unknown reference in the relMSE denominator is replaced by
 /// the image itself, which biases the estimate up by about 3·Var(pixel)/pixel² (the curvature of
-/// 1/x²); that bias vanishes as samples accumulate. Returns None below 2 samples.
+/// 1/x²); that bias vanishes as samples accumulate. Pixels of fewer than 2 samples are left out;
+/// None when every pixel has fewer.
 pub fn estimated_relmse(
     image: &[[f32; 3]],
     even: &[[f32; 3]],
     odd: &[[f32; 3]],
-    n: u32,
+    counts: &[u32],
 ) -> Option<f64> {
-    if n < 2 {
-        return None;
-    }
-    let ne = f64::from(n.div_ceil(2));
-    let no = f64::from(n / 2);
-    let scale = 1.0 / (f64::from(n) * (1.0 / ne + 1.0 / no));
     let (mut sum, mut count) = (0.0, 0u64);
-    for ((i, e), o) in image.iter().zip(even).zip(odd) {
-        if !(finite(i) && finite(e) && finite(o)) {
+    for (((i, e), o), &n) in image.iter().zip(even).zip(odd).zip(counts) {
+        if n < 2 || !(finite(i) && finite(e) && finite(o)) {
             continue;
         }
+        let ne = f64::from(n.div_ceil(2));
+        let no = f64::from(n / 2);
+        let scale = 1.0 / (f64::from(n) * (1.0 / ne + 1.0 / no));
         for c in 0..3 {
             let d = f64::from(e[c]) - f64::from(o[c]);
             let x = f64::from(i[c]);
@@ -86,7 +85,7 @@ pub fn estimated_relmse(
             count += 1;
         }
     }
-    Some(sum / count.max(1) as f64)
+    (count > 0).then(|| sum / count as f64)
 }
 
 #[cfg(test)]
@@ -164,7 +163,8 @@ mod tests {
             .map(|p| sigma * sigma / f64::from(n) / (f64::from(p[0]).powi(2) + RELMSE_EPSILON))
             .sum::<f64>()
             / pixels as f64;
-        let est = estimated_relmse(&img, &even, &odd, n).unwrap();
+        let counts = vec![n; pixels];
+        let est = estimated_relmse(&img, &even, &odd, &counts).unwrap();
         let tol = 5.0 * (2.0 / pixels as f64).sqrt() * expected;
         assert!(
             (est - expected).abs() < tol,
@@ -178,6 +178,6 @@ mod tests {
             (est / truth - 1.0 - bias).abs() < 0.05,
             "estimate {est}, true {truth}"
         );
-        assert_eq!(estimated_relmse(&img, &even, &odd, 1), None);
+        assert_eq!(estimated_relmse(&img, &even, &odd, &vec![1; pixels]), None);
     }
 }

@@ -25,17 +25,17 @@ fn planes(names: &[&str]) -> Vec<String> {
 
 /// The float32 sums a device would leave for block `start` of a film with `channels` channels a
 /// pixel: arbitrary but fixed values of all magnitudes (so float64 rounding would show), counts
-/// where FilmPixel has counts.
-fn block_sums(start: u32, channels: usize) -> Vec<f32> {
+/// where FilmPixel has counts, and the block's `samples` where it counts them.
+fn block_sums(start: u32, samples: u32, channels: usize) -> Vec<f32> {
     let mut rng = Rng::new(0x9e37_79b9_7f4a_7c15 ^ u64::from(start));
     let pixels = (W * H) as usize;
     (0..pixels * channels)
         .map(|i| {
             let u = rng.uniform_f32();
             match i % channels {
-                // clamped, rays, hits, non_finite: counts; odd.unused: 0.
+                // clamped, rays, hits, non_finite: counts; samples: the block's.
                 3 | 7 | 11 | 19 => (u * 256.0).floor(),
-                23 => 0.0,
+                23 => samples as f32,
                 c if c >= FILM_CHANNELS && (c - FILM_CHANNELS) % AOV_CHANNELS == 3 => 0.0,
                 c => u * 10f32.powi((c % 7) as i32 - 3) * 256.0,
             }
@@ -52,7 +52,7 @@ fn job_sums(range: (u32, u32), aov_planes: &[String]) -> FilmSums {
         if end <= range.0 || start >= range.1 {
             continue;
         }
-        let block = block_sums(start, c);
+        let block = block_sums(start, end - start, c);
         if start >= range.0 && end <= range.1 {
             sums.add_block(&block);
         } else {

@@ -184,7 +184,7 @@ fn film_channels_are_generated_from_the_header() {
             "hits",
             "depth",
             "non_finite",
-            "odd.unused"
+            "samples"
         )
     );
     assert_eq!(illum::layout::AOV_CHANNELS, 4);

@@ -54,7 +54,7 @@ uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     // light: 8 N_max stratified samples. With scrambled Sobol camera samples, 0.84x, 0.41x and
     // 0.76x the relMSE at equal time of 2 N_max on scenes/bench/dome.json, dome-occluders.json
     // and mitsuba-dome.json (docs/performance-sampling.md, "The dome's sample count again").
-    if (l.kind == LIGHT_DOME && l.texture != NONE) return 8u * n_max;
+    if (l.kind == LIGHT_DOME && l.texture != NONE) return frame.dome_samples * n_max;
     return clamp(uint(ceil(light_share(l, p) * float(n_max))), 1u, n_max);
 }
 

@@ -13,15 +13,15 @@ layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
 layout(push_constant, scalar) uniform PassBlock { PassConstants pc; };
 
 void main() {
-    uvec2 local = gl_GlobalInvocationID.xy;
-    if (local.x >= pc.tile.z || local.y >= pc.tile.w) return;
-    uvec2 pix = local + pc.tile.xy;
-    uint pixel = pix.y * frame.width + pix.x;
+    uvec2 pix;
+    uint pixel;
+    if (!film_pixel(pc, pix, pixel)) return;
     // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
     // fixed point (src/film/mod.rs), since long float32 running sums round systematically.
     FilmPixel acc = film[pixel];
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
-    for (uint k = 0u; k < pc.sample_count; ++k) {
+    uint samples = film_sample_count(pc, pixel);
+    for (uint k = 0u; k < samples; ++k) {
         uint sample_index = pc.first_sample + k;
         Rng rng;
         vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);

@@ -13,6 +13,35 @@
 #include "trace/hit.glsl"
 #include "lights/lights.glsl"
 
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelEndRef { uint v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelOrderRef { uint v[]; };
+
+// The invocation's pixel in dispatch p: of its tile, or with p.order entry p.tile.x + k of
+// Frame.pixel_order (adaptive sampling packs the pixels still sampling, so that no lane idles
+// beside a pixel that takes many more samples). False when the invocation has none.
+bool film_pixel(PassConstants p, out uvec2 pix, out uint pixel) {
+    uvec2 local = gl_GlobalInvocationID.xy;
+    if (local.x >= p.tile.z || local.y >= p.tile.w) return false;
+    if (p.order != 0u) {
+        uint k = local.y * p.tile.z + local.x;
+        if (k >= p.tile.y) return false;
+        pixel = PixelOrderRef(frame.pixel_order).v[p.tile.x + k];
+        pix = uvec2(pixel % frame.width, pixel / frame.width);
+        return true;
+    }
+    pix = local + p.tile.xy;
+    pixel = pix.y * frame.width + pix.x;
+    return true;
+}
+
+// The samples of pass p that pixel `pixel` takes: all of them, or with adaptive sampling those
+// below the index at which it stops (src/render/adaptive.rs decides it).
+uint film_sample_count(PassConstants p, uint pixel) {
+    if (frame.pixel_ends == 0ul) return p.sample_count;
+    uint end = PixelEndRef(frame.pixel_ends).v[pixel];
+    return end <= p.first_sample ? 0u : min(p.sample_count, end - p.first_sample);
+}
+
 // Direction of the camera ray through film position film_uv in [0,1]^2.
 vec3 camera_direction(vec2 film_uv) {
     vec2 ndc = 2.0 * film_uv - 1.0;
@@ -78,6 +107,7 @@ vec3 film_clamp(vec3 direct, inout FilmPixel acc) {
 bool film_add(inout FilmPixel acc, uint sample_index, vec3 beauty, vec3 le) {
     // Test hook (RenderSettings::inject_non_finite): every n-th sample_index of each pixel is NaN, so
     // that tests can check this accounting end to end.
+    acc.beauty_odd.w += 1.0;
     uint inject = frame.nan_every;
     if (inject != 0u && sample_index % inject == 0u) beauty.g = uintBitsToFloat(0x7fc00000u);
     bool finite = !non_finite(beauty);

@@ -85,9 +85,7 @@ bool full_begin(bool update, out FullPixel px) {
         for (uint v = 0u; v < pc.update.vertices; ++v) records.v[px.base + v] = none;
         return true;
     }
-    if (id.x >= pc.film.tile.z || id.y >= pc.film.tile.w) return false;
-    px.pix = id.xy + pc.film.tile.xy;
-    px.pixel = px.pix.y * frame.width + px.pix.x;
+    if (!film_pixel(pc.film, px.pix, px.pixel)) return false;
     px.acc = film[px.pixel];
     px.a_direct = aovs[px.pixel * AOV_PLANES + AOV_DIRECT];
     px.a_indirect = aovs[px.pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
@@ -304,7 +302,7 @@ void main() {
     if (!full_begin(update, px)) return;
     bool cache = radiosity_cache_on();
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
-    uint count = update ? 1u : pc.film.sample_count;
+    uint count = update ? 1u : film_sample_count(pc.film, px.pixel);
     for (uint k = 0u; k < count; ++k) {
         uint sample_index = pc.film.first_sample + k;
         Rng rng;

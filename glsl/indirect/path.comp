@@ -27,17 +27,17 @@ layout(push_constant, scalar) uniform PassBlock { PassConstants pc; };
 #define AOV_PLANES 3u
 
 void main() {
-    uvec2 local = gl_GlobalInvocationID.xy;
-    if (local.x >= pc.tile.z || local.y >= pc.tile.w) return;
-    uvec2 pix = local + pc.tile.xy;
-    uint pixel = pix.y * frame.width + pix.x;
+    uvec2 pix;
+    uint pixel;
+    if (!film_pixel(pc, pix, pixel)) return;
     FilmPixel acc = film[pixel];
     vec4 a_direct = aovs[pixel * AOV_PLANES + AOV_DIRECT];
     vec4 a_indirect = aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
     vec4 a_reflection = aovs[pixel * AOV_PLANES + AOV_REFLECTION];
     uint max_depth = frame.max_depth;
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
-    for (uint k = 0u; k < pc.sample_count; ++k) {
+    uint samples = film_sample_count(pc, pixel);
+    for (uint k = 0u; k < samples; ++k) {
         uint sample_index = pc.first_sample + k;
         Rng rng;
         vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);

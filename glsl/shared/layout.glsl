@@ -232,6 +232,14 @@ struct Frame {
     float shadow_cull;        // Russian roulette threshold on a candidate's luminance (with
                               // FEATURE_SHADOW_CULL; 0: off)
     uint control_variates;    // CONTROL_VARIATES_* (with FEATURE_CONTROL_VARIATES)
+    uint dome_samples;        // a textured dome's light samples per N_max (light_count_for)
+    uint pad_frame0;
+    uint64_t pixel_ends;      // uint per pixel: the sample index at which it stops (adaptive
+                              // sampling, film_sample_count; 0: every pixel takes every sample)
+    uint64_t pixel_order;     // uint array: pixel indices by descending end sample, which the
+                              // dispatches of PassConstants.order take in prefixes (film_pixel)
+    uint pad_frame1;
+    uint pad_frame2;
 };
 
 // Per-dispatch constants.
@@ -240,7 +248,13 @@ struct PassConstants {
     uint sample_count;    // samples per pixel in this dispatch
     uint seed_lo;
     uint seed_hi;
-    uvec4 tile;           // x0, y0, width, height of the pixel rectangle of this dispatch
+    uvec4 tile;           // x0, y0, width, height of the pixel rectangle of this dispatch; with
+                          // `order`: first entry of Frame.pixel_order, entries, and the grid's
+                          // width and height that cover them
+    uint order;           // 1: the dispatch takes pixels from Frame.pixel_order, else the tile
+    uint pad0;
+    uint pad1;
+    uint pad2;
 };
 
 struct GpuVertex {
@@ -384,8 +398,9 @@ struct FilmPixel {
     vec4 emission;   // rgb sum of directly seen emission; w = samples with non-finite beauty
                      // channels: emission.r emission.g emission.b non_finite
     vec4 beauty_odd; // rgb sum over the odd-numbered samples only: the two half-buffers (even =
-                     // beauty - beauty_odd) give an unbiased estimate of the pixel's variance
-                     // channels: odd.r odd.g odd.b odd.unused
+                     // beauty - beauty_odd) give an unbiased estimate of the pixel's variance;
+                     // w = samples taken (fewer than the pass's where adaptive sampling stops it)
+                     // channels: odd.r odd.g odd.b samples
 };
 
 // The compute BVH: device addresses of its arrays (uniform buffer at BINDING_BVH).

@@ -331,6 +331,10 @@ pub fn image_metadata(
     for (name, value) in &s.integrator {
         extra.push((format!("illum.{name}"), value.clone()));
     }
+    if let Some(t) = settings.noise_threshold {
+        extra.push(("illum.noiseThreshold".into(), t.error.to_string()));
+        extra.push(("illum.minSpp".into(), t.min_spp.to_string()));
+    }
     if let Some(c) = settings.clamp {
         extra.push(("illum.fireflyClamp".into(), format!("{c} (biased)")));
         extra.push(("illum.clampedSamples".into(), s.clamped_samples.to_string()));

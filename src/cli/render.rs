@@ -20,9 +20,19 @@ pub struct RenderArgs {
     /// Output image: .exr (all layers), or .png (then the .exr is written beside it too).
     #[arg(short, long, default_value = "illum.exr")]
     pub output: PathBuf,
-    /// Samples per pixel. [default: 16; with --time: no cap]
+    /// Samples per pixel. [default: 16; with --time: no cap; with --noise-threshold: 4096, the
+    /// most a pixel takes]
     #[arg(long)]
     pub spp: Option<u32>,
+    /// Adaptive sampling: each pixel stops once its estimated relative error (RMS, from its
+    /// neighbours' first --min-spp samples) is below this, e.g. 0.02 for 2%; the EXR then holds
+    /// each pixel's count as SampleCount. [default: off]
+    #[arg(long, value_name = "T")]
+    pub noise_threshold: Option<f64>,
+    /// With --noise-threshold: samples every pixel takes before its count is decided (a power of
+    /// two, 2 to 128).
+    #[arg(long, value_name = "N", default_value_t = crate::render::adaptive::NoiseThreshold::DEFAULT_MIN_SPP)]
+    pub min_spp: u32,
     /// Render for this many seconds (progressive passes) instead of a fixed sample count; --spp,
     /// if given, caps it.
     #[arg(long)]
@@ -102,6 +112,14 @@ fn parse_range(s: &str) -> std::result::Result<(u32, u32), String> {
 }
 
 impl RenderArgs {
+    fn noise_threshold(&self) -> Option<crate::render::adaptive::NoiseThreshold> {
+        self.noise_threshold
+            .map(|error| crate::render::adaptive::NoiseThreshold {
+                error,
+                min_spp: self.min_spp,
+            })
+    }
+
     /// The files a render reads, which no output may replace.
     fn inputs(&self) -> Vec<(&str, &Path)> {
         super::named([
@@ -161,6 +179,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let spp = match (a.spp, a.time) {
         (Some(n), _) => n,
         (None, Some(_)) => 1 << 20,
+        (None, None) if a.noise_threshold.is_some() => 4096,
         (None, None) => 16,
     };
     let settings = RenderSettings {
@@ -173,6 +192,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
         clamp: a.clamp,
         memory_limit: a.memory_limit,
+        noise_threshold: a.noise_threshold(),
         cancel: Some(cancel),
         ..Default::default()
     };
@@ -352,14 +372,20 @@ fn summary(
     let s = &out.stats;
     let b = &s.build;
     let last = out.passes.last().cloned().unwrap_or_default();
-    let samples = f64::from(scene.camera.width) * f64::from(scene.camera.height) * f64::from(s.spp);
+    let samples = s.camera_samples as f64;
+    let pixels = f64::from(scene.camera.width) * f64::from(scene.camera.height);
+    let spp = if s.camera_samples == pixels as u64 * u64::from(s.spp) {
+        s.spp.to_string()
+    } else {
+        format!("{:.1} (adaptive, at most {})", samples / pixels, s.spp)
+    };
     eprintln!(
         "illum: {}x{} at {} spp in {:.2} s on {} via {}: upload {:.3} s, structure build {:.3} s \
          ({} triangles; BLAS {:.1} MiB after compaction from {:.1}, TLAS {:.2} MiB), render {:.2} s \
          ({:.2} M camera samples/s, {:.2} M rays/s, {:.2} rays per sample); {} non-finite samples; wrote {}",
         scene.camera.width,
         scene.camera.height,
-        s.spp,
+        spp,
         s.total_seconds,
         ctx.info().name,
         s.trace,
@@ -469,6 +495,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         trace: a.trace,
         clamp: a.clamp,
         memory_limit: a.memory_limit,
+        noise_threshold: a.noise_threshold(),
         cancel: Some(cancel),
         samples,
         crop,

@@ -21,6 +21,8 @@ pub struct Film {
     pub emission: Vec<[f32; 3]>,
     /// AOV "Variance" (per-pixel variance of the beauty mean), when present.
     pub variance: Option<Vec<[f32; 3]>>,
+    /// AOV "SampleCount" (samples each pixel took), when they differ (adaptive sampling).
+    pub samples: Option<Vec<f32>>,
     /// The AOV planes the integrator declares (`Integrator::aov_planes`), in its order: means
     /// over all samples, written to the EXR as `<name>.R/G/B`.
     pub aovs: Vec<AovPlane>,
@@ -48,6 +50,7 @@ impl Film {
             depth: vec![0.0; n],
             emission: vec![[0.0; 3]; n],
             variance: None,
+            samples: None,
             aovs: Vec::new(),
         }
     }

@@ -308,6 +308,8 @@ pub struct Resolved {
     /// Means of the even- and odd-numbered samples (the half-buffers).
     pub even: Vec<[f32; 3]>,
     pub odd: Vec<[f32; 3]>,
+    /// Samples each pixel took: `spp`, or fewer where adaptive sampling stopped it.
+    pub counts: Vec<u32>,
     pub non_finite_samples: u64,
     /// Camera samples whose direct lighting the firefly clamp reduced.
     pub clamped_samples: u64,
@@ -315,9 +317,11 @@ pub struct Resolved {
     pub rays: u64,
 }
 
-/// Beauty, emission, albedo and normal are averaged over all samples (misses count as 0, as
-/// denoisers expect); Z over the samples that hit (+inf where none did); Variance is the variance
-/// of the pixel mean, s² / n; each AOV plane is averaged over all samples too. `sums` are the
+/// Beauty, emission, albedo and normal are averaged over all of a pixel's samples (misses count
+/// as 0, as denoisers expect; `spp`, or fewer where adaptive sampling stopped the pixel); Z over
+/// the samples that hit (+inf where none did); Variance is the variance of the pixel mean,
+/// s² / n; each AOV plane is averaged over all samples too. The film gets its SampleCount plane
+/// where the pixels' counts are not all `spp`. `sums` are the
 /// window's pixels, `width` x `height`, with the planes `aov_planes` after FilmPixel's channels.
 pub fn resolve(
     sums: &[i128],
@@ -335,10 +339,7 @@ pub fn resolve(
             rgb: vec![[0.0; 3]; film.pixel_count()],
         })
         .collect();
-    // A film of no samples resolves to zeros, never to NaN.
-    let n = f64::from(spp.max(1));
-    let n_even = f64::from(spp.div_ceil(2).max(1));
-    let n_odd = f64::from((spp / 2).max(1));
+    let mut counts = vec![0u32; film.pixel_count()];
     let mut variance = vec![[0.0f32; 3]; film.pixel_count()];
     let mut even = vec![[0.0f32; 3]; film.pixel_count()];
     let mut odd = vec![[0.0f32; 3]; film.pixel_count()];
@@ -352,6 +353,12 @@ pub fn resolve(
     const BEAUTY_ODD: usize = FilmPixel::BEAUTY_ODD;
     for (i, s) in sums.chunks_exact(channels).enumerate() {
         let p: [f64; FILM_CHANNELS] = std::array::from_fn(|k| from_fixed(s[k], k));
+        let count = p[BEAUTY_ODD + 3] as u32;
+        counts[i] = count;
+        // A pixel of no samples resolves to zeros, never to NaN.
+        let n = f64::from(count.max(1));
+        let n_even = f64::from(count.div_ceil(2).max(1));
+        let n_odd = f64::from((count / 2).max(1));
         for (k, plane) in film.aovs.iter_mut().enumerate() {
             let at = FILM_CHANNELS + AOV_CHANNELS * k;
             for c in 0..3 {
@@ -365,7 +372,7 @@ pub fn resolve(
             film.albedo[i][c] = (p[ALBEDO + c] / n) as f32;
             film.normal[i][c] = (p[NORMAL + c] / n) as f32;
             film.emission[i][c] = (p[EMISSION + c] / n) as f32;
-            if spp > 1 {
+            if count > 1 {
                 let m2 = p[BEAUTY_SQ + c] / n;
                 let sample_var = (m2 - mean * mean).max(0.0) * n / (n - 1.0);
                 variance[i][c] = (sample_var / n) as f32;
@@ -385,11 +392,15 @@ pub fn resolve(
         rays += p[BEAUTY_SQ + 3] as u64;
     }
     film.variance = Some(variance);
+    if counts.iter().any(|&c| c != spp) {
+        film.samples = Some(counts.iter().map(|&c| c as f32).collect());
+    }
     Resolved {
         film,
         spp,
         even,
         odd,
+        counts,
         non_finite_samples: non_finite,
         clamped_samples: clamped,
         rays,

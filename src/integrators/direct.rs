@@ -133,6 +133,9 @@ pub struct DirectLighting {
     pub brdf_samples: u32,
     /// Diffuse also by MIS with cosine-sampled BRDF samples (the course: light samples only).
     pub diffuse_mis: bool,
+    /// A textured dome's light samples per light sample of other lights (it varies far more
+    /// over its directions than any other light).
+    pub dome_samples: u32,
     /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
     pub light_selection: LightSelection,
     /// Share of each group's shadow-ray candidates that get shadow rays, picked by systematic
@@ -153,6 +156,7 @@ impl Default for DirectLighting {
             light_samples: 4,
             brdf_samples: 2,
             diffuse_mis: false,
+            dome_samples: 8,
             light_selection: LightSelection::Tree,
             shadow_resample: 1.0,
             shadow_cull: 0.0,
@@ -168,6 +172,7 @@ impl DirectLighting {
         "light_samples",
         "brdf_samples",
         "diffuse_mis",
+        "dome_samples",
         "light_selection",
         "shadow_resample",
         "shadow_cull",
@@ -182,6 +187,7 @@ impl DirectLighting {
             light_samples: p.get("light_samples", d.light_samples)?,
             brdf_samples: p.get("brdf_samples", d.brdf_samples)?,
             diffuse_mis: p.get_switch("diffuse_mis", d.diffuse_mis)?,
+            dome_samples: p.get("dome_samples", d.dome_samples)?,
             light_selection: p.get("light_selection", d.light_selection)?,
             shadow_resample: p.get("shadow_resample", d.shadow_resample)?,
             shadow_cull: p.get("shadow_cull", d.shadow_cull)?,
@@ -196,6 +202,12 @@ impl DirectLighting {
             return Err(format!(
                 "light and BRDF sample counts must be in 1..=64, got {} and {}",
                 self.light_samples, self.brdf_samples
+            ));
+        }
+        if !(1..=16).contains(&self.dome_samples) {
+            return Err(format!(
+                "the dome's samples per light sample must be in 1..=16, got {}",
+                self.dome_samples
             ));
         }
         if !(self.shadow_resample > 0.0 && self.shadow_resample <= 1.0) {
@@ -247,6 +259,7 @@ impl DirectLighting {
         };
         frame.light_samples = self.light_samples;
         frame.brdf_samples = self.brdf_samples;
+        frame.dome_samples = self.dome_samples;
         frame.integrator_flags = if self.diffuse_mis {
             INTEGRATOR_DIFFUSE_MIS
         } else {
@@ -270,11 +283,12 @@ impl DirectLighting {
     /// Its part of an integrator's identity, after the integrator's own parameters.
     pub fn identity(&self, integrator: &str, own: &str) -> String {
         format!(
-            "integrator={integrator} {own}technique={} light_samples={} brdf_samples={} diffuse_mis={} lights={} shadow_resample={} shadow_cull={} control_variates={}",
+            "integrator={integrator} {own}technique={} light_samples={} brdf_samples={} diffuse_mis={} dome_samples={} lights={} shadow_resample={} shadow_cull={} control_variates={}",
             self.technique.name(),
             self.light_samples,
             self.brdf_samples,
             self.diffuse_mis,
+            self.dome_samples,
             self.light_selection.name(),
             self.shadow_resample,
             self.shadow_cull,
@@ -289,6 +303,7 @@ impl DirectLighting {
             ("lightSamples".into(), self.light_samples.to_string()),
             ("brdfSamples".into(), self.brdf_samples.to_string()),
             ("diffuseMIS".into(), self.diffuse_mis.to_string()),
+            ("domeSamples".into(), self.dome_samples.to_string()),
             ("shadowResample".into(), self.shadow_resample.to_string()),
             ("shadowCull".into(), self.shadow_cull.to_string()),
             (

@@ -15,10 +15,14 @@ use std::path::{Path, PathBuf};
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
 pub fn settings_text(s: &RenderSettings) -> String {
     format!(
-        "{} clamp={} nan_every={}",
+        "{} clamp={} nan_every={}{}",
         s.integrator.identity(),
         s.clamp.map_or("off".into(), |c| c.to_string()),
-        s.inject_non_finite
+        s.inject_non_finite,
+        s.noise_threshold.map_or(String::new(), |t| format!(
+            " noise_threshold={} min_spp={}",
+            t.error, t.min_spp
+        ))
     )
 }
 

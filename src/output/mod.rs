@@ -48,6 +48,10 @@ pub(crate) fn validate_film(film: &Film, path: &Path) -> Result<(), OutputError>
             "variance",
             film.variance.as_ref().map_or(expected, Vec::len),
         ),
+        (
+            "sample count",
+            film.samples.as_ref().map_or(expected, Vec::len),
+        ),
     ];
     let aovs = film.aovs.iter().map(|a| (a.name.as_str(), a.rgb.len()));
     for (plane, len) in planes.into_iter().chain(aovs) {

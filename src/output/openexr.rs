@@ -135,6 +135,9 @@ struct FilmChannels<'a> {
 impl<'a> FilmChannels<'a> {
     fn new(film: &'a Film) -> Self {
         let mut channels = vec![("Z".to_string(), Source::Scalar(&film.depth))];
+        if let Some(samples) = &film.samples {
+            channels.push(("SampleCount".to_string(), Source::Scalar(samples)));
+        }
         let mut add = |layer: &str, components: [&str; 3], plane: &'a [[f32; 3]]| {
             for (c, component) in components.into_iter().enumerate() {
                 let name = if layer.is_empty() {

@@ -223,10 +223,34 @@ pub fn tiles(window: Window, first: u32, count: u32, seed: u64) -> Vec<PassConst
                 seed_lo: seed as u32,
                 seed_hi: (seed >> 32) as u32,
                 tile: [x0, y0, TILE.min(window.x1 - x0), TILE.min(window.y1 - y0)],
+                ..Default::default()
             });
         }
     }
     out
+}
+
+/// The push constants of the dispatches that take the first `count` entries of Frame.pixel_order
+/// for samples [first, first + samples) with `seed`: grids of PACKED_WIDTH columns, at most
+/// TILE x TILE pixels each, as the tiles are.
+pub fn packed(count: u32, first: u32, samples: u32, seed: u64) -> Vec<PassConstants> {
+    const PACKED_WIDTH: u32 = 256;
+    let most = TILE * TILE;
+    (0..count)
+        .step_by(most as usize)
+        .map(|offset| {
+            let n = most.min(count - offset);
+            PassConstants {
+                first_sample: first,
+                sample_count: samples,
+                seed_lo: seed as u32,
+                seed_hi: (seed >> 32) as u32,
+                tile: [offset, n, PACKED_WIDTH, n.div_ceil(PACKED_WIDTH)],
+                order: 1,
+                ..Default::default()
+            }
+        })
+        .collect()
 }
 
 /// A blocking render's run over its seeds: set up once, then each seed renders into the same
@@ -244,6 +268,14 @@ pub struct Blocking<'a> {
     pub window: Window,
     /// Samples per dispatch at most (1 where the driver cuts long loops short).
     pub per_dispatch: u32,
+    /// Whether the driver cuts long loops short (then every dispatch takes one sample).
+    pub loop_limited: bool,
+    /// With adaptive sampling: each pixel's end sample (Frame.pixel_ends), the order in which
+    /// dispatches take the pixels (Frame.pixel_order) and the pilot's pixels, the window and the
+    /// ring around it (src/render/adaptive.rs).
+    pub adaptive: Option<(&'a Buffer, &'a Buffer, Window)>,
+    /// The image's height.
+    pub height: u32,
 }
 
 /// Where one seed's render stands.
@@ -256,6 +288,11 @@ struct Progress {
     sums: film::FilmSums,
     passes: Vec<super::PassReport>,
     last_resolved: Option<film::Resolved>,
+    /// With adaptive sampling, once the pixels' counts are decided: the sample at which every
+    /// pixel of the window has stopped, and the window's end samples in descending order (as
+    /// Frame.pixel_order has the pixels).
+    stop: Option<u32>,
+    ends: Vec<u32>,
 }
 
 impl Blocking<'_> {
@@ -296,9 +333,23 @@ impl Blocking<'_> {
             sums: film::FilmSums::new(self.window, planes.clone()),
             passes: Vec::new(),
             last_resolved: None,
+            stop: None,
+            ends: Vec::new(),
         };
+        if let Some((ends, _, _)) = self.adaptive {
+            // A fresh seed: every pixel renders until its count is decided.
+            let pixels = self.width as usize * self.height as usize;
+            self.ctx.write(ends, 0, &vec![u32::MAX; pixels])?;
+            // The counts come from a pilot of samples of their own, left out of the image.
+            let start = Instant::now();
+            self.pilot(seed)?;
+            self.decide_counts(&mut p, first)?;
+            film::clear(self.ctx, self.film.device())?;
+            p.wall += start.elapsed().as_secs_f64();
+            p.device += start.elapsed().as_secs_f64();
+        }
         while p.done < budget && !p.interrupted {
-            let Some(pass) = self.plan_pass(&p, budget) else {
+            let Some(pass) = self.plan_pass(&p, first, budget) else {
                 break;
             };
             let start = Instant::now();
@@ -312,7 +363,15 @@ impl Blocking<'_> {
             }
             self.report_pass(&mut p, &planes, evaluate, first, last)?;
         }
-        if p.done < budget {
+        let end = first + p.done;
+        if p.stop.is_some_and(|s| end >= s) && !p.interrupted {
+            // Adaptive sampling stopped every pixel inside a block: the block is complete (no
+            // pixel takes more of it), so it leaves as a whole one would.
+            let (start, block_end) = film::block_of(end.max(1) - 1, self.settings.spp);
+            if end > 0 && block_end != end {
+                self.commit_block(&mut p, start, block_end)?;
+            }
+        } else if p.done < budget {
             // A time budget ended the render inside a block: keep what was rendered.
             let block =
                 film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
@@ -331,8 +390,15 @@ impl Blocking<'_> {
         if !evaluate && let Some(r) = p.passes.last_mut() {
             evaluate_pass(r, &resolved, self.settings.reference.as_deref());
         }
+        // Adaptive sampling that stopped every pixel leaves none of the range undone.
+        let stopped = p.stop.is_some_and(|s| first + p.done >= s) && !p.interrupted;
+        let covered = if stopped {
+            self.range.1
+        } else {
+            self.range.1.min(first + p.done)
+        };
         Ok(SeedOutput {
-            range: (self.range.0, self.range.1.min(first + p.done)),
+            range: (self.range.0, covered),
             done: p.done,
             wall: p.wall,
             device: p.device,
@@ -345,9 +411,15 @@ impl Blocking<'_> {
 
     /// The next pass's sample count: half the samples so far (log-spaced points on the error
     /// curve), under a time budget sized to the time left at the measured rate; None when the
-    /// time is up.
-    fn plan_pass(&self, p: &Progress, budget: u32) -> Option<u32> {
-        let mut pass = (p.done / 2).max(1).min(budget - p.done);
+    /// time is up or adaptive sampling has stopped every pixel.
+    fn plan_pass(&self, p: &Progress, first: u32, budget: u32) -> Option<u32> {
+        let end = p
+            .stop
+            .map_or(budget, |s| s.saturating_sub(first).min(budget));
+        if p.done >= end {
+            return None;
+        }
+        let mut pass = (p.done / 2).max(1).min(end - p.done);
         if let Some(t) = self.settings.time {
             if p.wall >= t {
                 return None;
@@ -358,6 +430,66 @@ impl Blocking<'_> {
             }
         }
         Some(pass)
+    }
+
+    /// Renders the pilot of adaptive sampling into the (cleared) film: samples [0, min_spp) of
+    /// the window and the ring of pixels around it, with a seed of their own
+    /// ([`super::adaptive::pilot_seed`]): independent of the image's samples.
+    fn pilot(&self, seed: u64) -> Result<()> {
+        let (Some(t), Some((_, _, ring))) = (self.settings.noise_threshold, self.adaptive) else {
+            return Ok(());
+        };
+        let seed = super::adaptive::pilot_seed(seed);
+        let kernels = &self.setup.kernels;
+        let mut s = 0;
+        while s < t.min_spp {
+            let n = self.per_dispatch.min(t.min_spp - s);
+            let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
+            for pc in tiles(ring, s, n, seed) {
+                self.ctx.one_shot(|cmd| kernels.record(cmd, &pc))?;
+            }
+            s += n;
+        }
+        Ok(())
+    }
+
+    /// Decides every pixel's count from the pilot, which the device film holds, and uploads the
+    /// pixels' end samples.
+    fn decide_counts(&self, p: &mut Progress, first: u32) -> Result<()> {
+        let (Some(t), Some((ends, order, ring))) = (self.settings.noise_threshold, self.adaptive)
+        else {
+            return Ok(());
+        };
+        let block = film::download_window(self.ctx, self.film.device(), self.width, ring)?;
+        let planes: Vec<String> = self
+            .setup
+            .aov_planes
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        let mut sums = vec![0i128; block.len()];
+        film::add_block(&mut sums, &block, film::channels(planes.len()));
+        let r = film::resolve(&sums, &planes, ring.width(), ring.height(), t.min_spp);
+        let e = super::adaptive::pixel_ends(
+            &t,
+            &r,
+            ring,
+            self.window,
+            (self.width, self.height),
+            self.settings.spp,
+        );
+        let w = self.window;
+        let mut pixels: Vec<u32> = (w.y0..w.y1)
+            .flat_map(|y| (w.x0..w.x1).map(move |x| y * self.width + x))
+            .collect();
+        // Descending end, then in image order: each pass takes a prefix.
+        pixels.sort_by_key(|&i| (std::cmp::Reverse(e[i as usize]), i));
+        p.ends = pixels.iter().map(|&i| e[i as usize]).collect();
+        let last = p.ends.first().copied().unwrap_or(t.min_spp);
+        self.ctx.write(ends, 0, &e)?;
+        self.ctx.write(order, 0, &pixels)?;
+        p.stop = Some(last.max(first));
+        Ok(())
     }
 
     /// Dispatches `pass` samples from sample `from`, moving each block off the device when it
@@ -376,10 +508,24 @@ impl Blocking<'_> {
         while k < pass {
             let s = from + k;
             let (block_start, block_end) = film::block_of(s, self.settings.spp);
-            let n = self.per_dispatch.min(pass - k).min(block_end - s);
+            // With adaptive sampling, the pixels still sampling at s, packed: as few as they are,
+            // a dispatch may take more samples of each.
+            let active = p.stop.map(|_| p.ends.partition_point(|&e| e > s) as u32);
+            let per_dispatch = match active {
+                Some(a) if !self.loop_limited => {
+                    (self.settings.samples_per_submit / u64::from(a.clamp(1, TILE * TILE)))
+                        .clamp(1, u64::from(film::FILM_BLOCK)) as u32
+                }
+                _ => self.per_dispatch,
+            };
+            let n = per_dispatch.min(pass - k).min(block_end - s);
             // The integrator's own state (a cache generation) may end a dispatch early.
             let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
-            for pc in tiles(self.window, s, n, seed) {
+            let dispatches = match active {
+                Some(a) => packed(a, s, n, seed),
+                None => tiles(self.window, s, n, seed),
+            };
+            for pc in dispatches {
                 self.ctx.one_shot(|cmd| {
                     crate::vk::GpuTimer::around(self.timer, cmd, || kernels.record(cmd, &pc))
                 })?;
@@ -479,6 +625,6 @@ pub fn evaluate_pass(
 ) {
     use crate::metrics;
     report.non_finite_samples = r.non_finite_samples;
-    report.estimated_relmse = metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, r.spp);
+    report.estimated_relmse = metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, &r.counts);
     report.error = reference.map(|reference| metrics::compare(&r.film.beauty, reference));
 }

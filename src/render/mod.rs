@@ -6,6 +6,7 @@
 //! compared with a reference (RMSE, relMSE, MAE) or, without one, its relMSE is estimated from the
 //! even and odd half-buffers (see [`crate::metrics`]).
 
+pub mod adaptive;
 mod driver;
 pub mod film_kernel;
 mod integrator;
@@ -62,6 +63,9 @@ pub struct RenderStats {
     pub device_seconds: f64,
     pub total_seconds: f64,
     pub spp: u32,
+    /// Camera samples of the image, over all its pixels (with adaptive sampling fewer than
+    /// pixels x spp; its pilot's are not counted, its time is in `render_seconds`).
+    pub camera_samples: u64,
     /// Camera samples whose beauty was NaN or infinite (counted, then replaced by 0).
     pub non_finite_samples: u64,
     /// Rays traced: camera rays and shadow rays.
@@ -90,6 +94,7 @@ impl RenderStats {
             render_seconds: o.wall,
             device_seconds: o.device,
             spp: o.done,
+            camera_samples: r.counts.iter().map(|&c| u64::from(c)).sum(),
             non_finite_samples: r.non_finite_samples,
             rays: r.rays,
             trace: prepared.trace.name(),
@@ -216,7 +221,21 @@ impl Renderer {
             settings.integrator.aov_planes().len(),
             seeds.len(),
         )?;
-        let setup = driver::Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
+        let mut setup = driver::Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
+        // Adaptive sampling: each pixel's end sample (all of them until the counts are
+        // decided) and the order in which the dispatches take the pixels.
+        let ends = match settings.noise_threshold {
+            Some(_) => {
+                let all = vec![u32::MAX; w as usize * h as usize];
+                let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+                let ends = ctx.upload("pixel ends", &all, usage)?;
+                let order = ctx.upload("pixel order", &all, usage)?;
+                setup.frame.pixel_ends = ends.address;
+                setup.frame.pixel_order = order.address;
+                Some((ends, order))
+            }
+            None => None,
+        };
         let frame = ctx.upload(
             "frame",
             std::slice::from_ref(&setup.frame),
@@ -240,7 +259,8 @@ impl Renderer {
         // block (src/film/mod.rs): blocks leave the device whole.
         let tile_pixels = u64::from(window.width().min(driver::TILE))
             * u64::from(window.height().min(driver::TILE));
-        let per_dispatch = if self.loop_limited()? {
+        let loop_limited = self.loop_limited()?;
+        let per_dispatch = if loop_limited {
             1
         } else {
             (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_BLOCK)) as u32
@@ -255,6 +275,11 @@ impl Renderer {
             range,
             window,
             per_dispatch,
+            loop_limited,
+            adaptive: ends
+                .as_ref()
+                .map(|(e, o)| (e, o, adaptive::ring(window, w, h))),
+            height: h,
         };
         let (first, last) = run.blocks();
         progress(0, last - first);

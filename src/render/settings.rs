@@ -44,6 +44,9 @@ pub struct RenderSettings {
     /// Host memory the film may take, in bytes (None: what the machine has available); a
     /// render that would need more is refused before it starts (src/film/memory.rs).
     pub memory_limit: Option<u64>,
+    /// Adaptive sampling: each pixel stops when its estimated relative error reaches the target
+    /// (`spp` is then the most a pixel takes; src/render/adaptive.rs).
+    pub noise_threshold: Option<super::adaptive::NoiseThreshold>,
 }
 
 impl RenderSettings {
@@ -74,6 +77,9 @@ impl RenderSettings {
             )));
         }
         self.integrator.check().map_err(Error::Invalid)?;
+        if let Some(t) = &self.noise_threshold {
+            t.check(self.spp).map_err(Error::Invalid)?;
+        }
         if let Some(c) = self.clamp
             && !(c.is_finite() && c > 0.0)
         {
@@ -126,6 +132,7 @@ impl RenderSettings {
             samples: None,
             crop: None,
             memory_limit: None,
+            noise_threshold: None,
         }
     }
 }

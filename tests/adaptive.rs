@@ -1,0 +1,369 @@
+//! Adaptive pixel sampling (`--noise-threshold`, src/render/adaptive.rs): unbiased (per-pixel
+//! t-tests over independent renders against the closed form of a Lambert floor under a rect
+//! light), on target (the error against converged references of three scenes is at most T²),
+//! split renders by sample range and by tile merge bit-identically to one render, and the command
+//! line refuses bad values naming them and writes each pixel's count.
+
+mod common;
+use common::*;
+use glam::DVec3;
+use illum::film::Window;
+use illum::integrators::{Direct, DirectLighting, Technique};
+use illum::jobs::partial::{read_partial, write_partial};
+use illum::jobs::{Part, merge, part_info};
+use illum::render::adaptive::NoiseThreshold;
+use illum::render::{RenderOutput, RenderSettings, Renderer};
+use illum::scene::Scene;
+use illum::stress::closed_form::polygon_irradiance;
+use std::path::Path;
+
+fn render(r: &Renderer, scene: &Scene, s: &RenderSettings) -> RenderOutput {
+    r.render(scene, s, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("render: {e}"))
+}
+
+/// The counts of an adaptive render: every one a power of two from the minimum, or the cap.
+fn counts(out: &RenderOutput, t: NoiseThreshold, cap: u32) -> Vec<u32> {
+    let c: Vec<u32> = out
+        .film
+        .samples
+        .as_ref()
+        .expect("the counts differ, so the film has its SampleCount plane")
+        .iter()
+        .map(|&c| c as u32)
+        .collect();
+    for &n in &c {
+        assert!(
+            n == cap || (n >= t.min_spp && n < cap && n.is_power_of_two()),
+            "count {n} (min {}, cap {cap})",
+            t.min_spp
+        );
+    }
+    c
+}
+
+#[test]
+fn adaptive_sampling_is_unbiased() {
+    // A 4 x 4 rect light 0.4 above a Lambert floor (tests/stratified.rs's closed form): the
+    // noise falls off away from it, so counts range from the minimum to the cap.
+    const W: u32 = 12;
+    const CAP: u32 = 256;
+    let (albedo, camera, fov) = (0.5, DVec3::new(1.0, 0.3, 0.2), 20.0);
+    let (l, h, s) = (2.0, 0.4, 2.0);
+    let json = format!(
+        r#"{{"camera": {{"position": [1.0, 0.3, 0.2], "look_at": [0, 0, 0], "fov_y": {fov}, "resolution": [{W}, {W}]}},
+            "materials": {{"m": {{"diffuse": [{albedo}, {albedo}, {albedo}]}}}},
+            "shapes": {{"floor": {{"rect": {{"center": [0, 0, 0], "normal": [0, 1, 0], "size": [40, 40]}}, "material": "m"}}}},
+            "lights": {{"l": {{"rect": {{"center": [0, {h}, 0], "normal": [0, -1, 0], "size": [{}, {}]}}, "intensity": {l}}}}}}}"#,
+        2.0 * s,
+        2.0 * s
+    );
+    let scene = scene(&json);
+    let ctx = context();
+    let r = Renderer::new(ctx.clone());
+    let t = NoiseThreshold {
+        error: 0.06,
+        min_spp: 4,
+    };
+    // One light sample, light sampling only: noisy enough that the counts spread (8 to 256).
+    let settings = RenderSettings {
+        spp: CAP,
+        seed: 5,
+        trace: trace_mode(),
+        integrator: std::sync::Arc::new(Direct(DirectLighting {
+            technique: Technique::Light,
+            light_samples: 1,
+            ..Default::default()
+        })),
+        noise_threshold: Some(t),
+        ..Default::default()
+    };
+    let c = counts(&render(&r, &scene, &settings), t, CAP);
+    let (lo, hi) = (c.iter().min().unwrap(), c.iter().max().unwrap());
+    eprintln!("counts from {lo} to {hi}");
+    assert!(
+        lo < hi,
+        "the counts must vary for this test to mean anything"
+    );
+    let corners = [
+        DVec3::new(-s, h, -s),
+        DVec3::new(s, h, -s),
+        DVec3::new(s, h, s),
+        DVec3::new(-s, h, s),
+    ];
+    let irradiance = |p: DVec3| {
+        let rel: Vec<DVec3> = corners.iter().map(|c| *c - p).collect();
+        l * polygon_irradiance(DVec3::Y, &rel)
+    };
+    let b = Batches::render(
+        &r,
+        &scene,
+        &RenderSettings {
+            spp: CAP * BATCHES,
+            ..settings
+        },
+        BATCHES,
+    );
+    let pts = floor_points(camera, fov, W, W);
+    assert_lambert_floor(&b, &pts, albedo, irradiance);
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn adaptive_sampling_agrees_with_uniform_sampling() {
+    // A textured sky with a sun, glossy and diffuse spheres and their shadows: per-pixel Welch
+    // tests of adaptive against uniform renders, BATCHES each, family-wise 0.01.
+    let ctx = context();
+    let r = Renderer::new(ctx.clone());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench/dome.json");
+    let mut scene = illum::scene::load(&dir).unwrap_or_else(|e| panic!("{e}"));
+    (scene.camera.width, scene.camera.height) = (24, 18);
+    const CAP: u32 = 128;
+    let t = NoiseThreshold {
+        error: 0.05,
+        min_spp: 8,
+    };
+    let uniform = RenderSettings {
+        spp: CAP,
+        seed: 9,
+        trace: trace_mode(),
+        ..Default::default()
+    };
+    let adaptive = RenderSettings {
+        noise_threshold: Some(t),
+        seed: 10,
+        ..uniform.clone()
+    };
+    let c = counts(&render(&r, &scene, &adaptive), t, CAP);
+    assert!(c.iter().min() < c.iter().max(), "the counts must vary");
+    let batches = |s: &RenderSettings| {
+        Batches::render(
+            &r,
+            &scene,
+            &RenderSettings {
+                spp: CAP * BATCHES,
+                ..s.clone()
+            },
+            BATCHES,
+        )
+    };
+    let (a, u) = (batches(&adaptive), batches(&uniform));
+    let tests = (a.mean.len() * 3) as f64;
+    let per = 1.0 - (1.0 - 0.01f64).powf(1.0 / tests);
+    // Welch's dof is at least that of one batch set: the limit is conservative.
+    let limit = t_for(per, f64::from(BATCHES - 1));
+    let mut worst = 0.0f64;
+    for i in 0..a.mean.len() {
+        for ch in 0..3 {
+            let d = a.mean[i][ch] - u.mean[i][ch];
+            let sd = (a.var[i][ch] + u.var[i][ch]).sqrt();
+            let floor = 1e-5 * u.mean[i][ch].abs() + 1e-6;
+            worst = worst.max((d.abs() - floor).max(0.0) / sd.max(1e-300));
+            assert!(
+                d.abs() <= limit * sd + floor,
+                "pixel {i} channel {ch}: adaptive {} vs uniform {} (t = {:.2}, limit {limit:.2})",
+                a.mean[i][ch],
+                u.mean[i][ch],
+                d / sd
+            );
+        }
+    }
+    eprintln!("largest |t|: {worst:.2} (limit {limit:.2})");
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn the_noise_threshold_reaches_its_target() {
+    let ctx = context();
+    let r = Renderer::new(ctx.clone());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let load = |path: &str, w: u32, h: u32| {
+        let mut s = illum::scene::load(&dir.join(path)).unwrap_or_else(|e| panic!("{e}"));
+        s.camera.width = w;
+        s.camera.height = h;
+        s
+    };
+    let t = NoiseThreshold {
+        error: 0.05,
+        min_spp: 16,
+    };
+    const CAP: u32 = 1024;
+    for (name, scene) in [
+        (
+            "small",
+            illum::scene::from_json_str(SMALL_SCENE, "<small>", Path::new(".")).unwrap(),
+        ),
+        ("bench/dome", load("bench/dome.json", 40, 30)),
+        ("veach", load("veach.json", 48, 36)),
+    ] {
+        let uniform = |spp, seed| RenderSettings {
+            spp,
+            seed,
+            trace: trace_mode(),
+            ..Default::default()
+        };
+        let reference = render(&r, &scene, &uniform(4096, 1000));
+        // The reference's own squared error, per pixel: its Variance plane (s² / n, an
+        // overestimate under stratified samples), subtracted from the measured error.
+        let ref_var = reference.film.variance.as_ref().unwrap();
+        let out = render(
+            &r,
+            &scene,
+            &RenderSettings {
+                noise_threshold: Some(t),
+                ..uniform(CAP, 3)
+            },
+        );
+        let c = counts(&out, t, CAP);
+        let (mut err, mut n) = (0.0, 0.0);
+        for (i, (p, q)) in out
+            .film
+            .beauty
+            .iter()
+            .zip(&reference.film.beauty)
+            .enumerate()
+        {
+            for ch in 0..3 {
+                let d = f64::from(p[ch]) - f64::from(q[ch]);
+                let e = d * d - f64::from(ref_var[i][ch]);
+                err += e / (f64::from(q[ch]).powi(2) + illum::metrics::RELMSE_EPSILON);
+                n += 1.0;
+            }
+        }
+        let relmse = err / n;
+        let mean_count = c.iter().map(|&x| f64::from(x)).sum::<f64>() / c.len() as f64;
+        eprintln!(
+            "{name}: relMSE {relmse:.3e} = {:.3} T², {mean_count:.1} samples a pixel on average \
+             (min {}, max {})",
+            relmse / (t.error * t.error),
+            c.iter().min().unwrap(),
+            c.iter().max().unwrap()
+        );
+        assert!(
+            relmse <= t.error * t.error,
+            "{name}: relMSE {relmse:.3e} above the target {:.3e}",
+            t.error * t.error
+        );
+        assert!(
+            mean_count < f64::from(CAP) / 2.0,
+            "{name}: {mean_count} samples a pixel on average: the threshold stopped too few"
+        );
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// Renders one job and writes it as a partial EXR, read back as a merge would.
+fn job(r: &Renderer, scene: &Scene, s: &RenderSettings, name: &str) -> Part {
+    let out = render(r, scene, s);
+    let path = temp_path(&format!("adaptive-{name}.exr"));
+    write_partial(
+        &path,
+        &part_info(scene, s, &out, "test").unwrap(),
+        &out.job.sums,
+    )
+    .unwrap();
+    let (info, sums) = read_partial(&path).unwrap();
+    Part { path, info, sums }
+}
+
+#[test]
+fn adaptive_renders_split_and_merged_equal_one_render() {
+    let ctx = context();
+    let scene = scene(SMALL_SCENE);
+    let r = Renderer::new(ctx.clone());
+    let t = NoiseThreshold {
+        error: 0.03,
+        min_spp: 8,
+    };
+    let settings = |samples, crop| RenderSettings {
+        spp: 600,
+        seed: 7,
+        trace: trace_mode(),
+        samples,
+        crop,
+        noise_threshold: Some(t),
+        ..Default::default()
+    };
+    let whole = render(&r, &scene, &settings(None, None));
+    let c = counts(&whole, t, 600);
+    assert!(c.iter().min() < c.iter().max(), "the counts must vary");
+    // Sample ranges: the last two start past the first block, so they render the first samples
+    // of their window's ring to decide the counts.
+    let ranges = [(0, 100), (100, 256), (256, 520), (520, 600)];
+    let parts: Vec<Part> = ranges
+        .iter()
+        .map(|&(a, b)| job(&r, &scene, &settings(Some((a, b)), None), &format!("s{a}")))
+        .collect();
+    assert_eq!(merge(&parts).unwrap().film, whole.film, "sample ranges");
+    let win = |x0, y0, x1, y1| Window { x0, y0, x1, y1 };
+    let tiles = [
+        win(0, 0, 5, 4),
+        win(5, 0, 13, 4),
+        win(0, 4, 7, 9),
+        win(7, 4, 13, 9),
+    ];
+    let parts: Vec<Part> = tiles
+        .iter()
+        .map(|w| job(&r, &scene, &settings(None, Some(*w)), &format!("c{w}")))
+        .collect();
+    assert_eq!(merge(&parts).unwrap().film, whole.film, "tiles");
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn the_command_line_checks_the_threshold_and_writes_the_counts() {
+    let out = temp_path("adaptive-cli.exr");
+    let o = out.to_str().unwrap();
+    for (args, expected) in [
+        (
+            vec!["--noise-threshold", "0"],
+            "--noise-threshold must be a positive",
+        ),
+        (
+            vec!["--noise-threshold", "nan"],
+            "--noise-threshold must be a positive",
+        ),
+        (
+            vec!["--noise-threshold", "0.1", "--min-spp", "3"],
+            "--min-spp must be a power of two",
+        ),
+        (
+            vec!["--noise-threshold", "0.1", "--spp", "16"],
+            "needs --spp",
+        ),
+    ] {
+        let mut all = vec!["render", "--width", "32", "-o", o, "--quiet"];
+        all.extend(&args);
+        let (code, err) = illum_cli(&all);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
+    let (code, err) = illum_cli(&[
+        "render",
+        "--width",
+        "32",
+        "--noise-threshold",
+        "0.05",
+        "--spp",
+        "64",
+        "-o",
+        o,
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let img = illum::output::read_exr(&out).unwrap();
+    let (_, counts) = img
+        .channels
+        .iter()
+        .find(|(n, _)| n == "SampleCount")
+        .expect("a SampleCount channel");
+    assert!(counts.iter().all(|&c| (16.0..=64.0).contains(&c)));
+    assert!(counts.iter().any(|&c| c < 64.0), "some pixel stops early");
+    let attr = |k: &str| {
+        img.attributes
+            .iter()
+            .find(|(n, _)| n == k)
+            .map(|(_, v)| v.clone())
+    };
+    assert_eq!(attr("illum.noiseThreshold").as_deref(), Some("0.05"));
+}
