@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""Adaptive sampling (--noise-threshold) against uniform sampling at equal time
+"""Adaptive sampling (--noise-threshold, --adaptive) against uniform sampling at equal time
 (docs/adaptive-sampling.md). For measurement only: needs numpy and OpenEXR (pip) and a release
 build of illum.
 
 For each scene: a reference (uniform, --ref-spp samples, another seed; cached in --out), then
-for each threshold T an adaptive render, and a uniform render given the adaptive one's render
-time (--time). Per pixel, the squared relative error against the reference (epsilon 0.01, as
+for each threshold T an adaptive render (and for each mean N of --means an --adaptive render of
+N samples a pixel on average), and a uniform render given the adaptive one's render time
+(--time). Per pixel, the squared relative error against the reference (epsilon 0.01, as
 src/metrics.rs) less the reference's own (its Variance plane over the same denominator). The
 table gives the image relMSE and the share of pixels whose error exceeds T² (what a noise
 threshold promises to bound), the adaptive render's mean count and the uniform one's spp.
@@ -41,6 +42,7 @@ def main():
     ap.add_argument("scenes", nargs="+")
     ap.add_argument("--width", type=int, default=160)
     ap.add_argument("--thresholds", default="0.05,0.02")
+    ap.add_argument("--means", default="", help="mean counts for --adaptive, e.g. 64,256")
     ap.add_argument("--ref-spp", type=int, default=16384)
     ap.add_argument("--out", default="bench-adaptive")
     a = ap.parse_args()
@@ -62,9 +64,12 @@ def main():
             e = (((img - ref) ** 2 - ref_var) / den).mean(axis=-1)
             return e
 
-        for t in [float(x) for x in a.thresholds.split(",")]:
+        runs = [(f"T {t}", ["--noise-threshold", t], float(t)) for t in a.thresholds.split(",") if t]
+        runs += [(f"mean {n}", ["--adaptive", "--spp", n], None) for n in a.means.split(",") if n]
+        for label, flags, t in runs:
             img, _, counts, secs = render(scene, os.path.join(a.out, "adaptive.exr"),
-                                          base + ["--noise-threshold", str(t), "--seed", "3"])
+                                          base + flags + ["--seed", "3"])
+            t = t if t is not None else 0.02
             e = errors(img)
             uimg, _, _, _ = render(scene, os.path.join(a.out, "uniform.exr"),
                                    base + ["--time", f"{secs:.4f}", "--seed", "3"])
@@ -72,7 +77,7 @@ def main():
             uspp = uf.header()["illum.spp"]
             ue = errors(uimg)
             mean = counts.mean() if counts is not None else float("nan")
-            print(f"| {scene} | {t} | {secs:.2f} s, {mean:.1f}, {e.mean():.2e}, {np.mean(e > t * t):.1%} "
+            print(f"| {scene} | {label} | {secs:.2f} s, {mean:.1f}, {e.mean():.2e}, {np.mean(e > t * t):.1%} "
                   f"| {uspp}, {ue.mean():.2e}, {np.mean(ue > t * t):.1%} |")
 
 

@@ -11,7 +11,7 @@ use illum::film::Window;
 use illum::integrators::{Direct, DirectLighting, Technique};
 use illum::jobs::partial::{read_partial, write_partial};
 use illum::jobs::{Part, merge, part_info};
-use illum::render::adaptive::NoiseThreshold;
+use illum::render::adaptive::{Adaptive, Target};
 use illum::render::{RenderOutput, RenderSettings, Renderer};
 use illum::scene::Scene;
 use illum::stress::closed_form::polygon_irradiance;
@@ -22,8 +22,9 @@ fn render(r: &Renderer, scene: &Scene, s: &RenderSettings) -> RenderOutput {
         .unwrap_or_else(|e| panic!("render: {e}"))
 }
 
-/// The counts of an adaptive render: every one a power of two from the minimum, or the cap.
-fn counts(out: &RenderOutput, t: NoiseThreshold, cap: u32) -> Vec<u32> {
+/// The counts of an adaptive render: with a threshold, every one a power of two from the
+/// minimum, or the cap; with a mean, that mean on average.
+fn counts(out: &RenderOutput, t: Adaptive, cap: u32) -> Vec<u32> {
     let c: Vec<u32> = out
         .film
         .samples
@@ -32,12 +33,25 @@ fn counts(out: &RenderOutput, t: NoiseThreshold, cap: u32) -> Vec<u32> {
         .iter()
         .map(|&c| c as u32)
         .collect();
-    for &n in &c {
-        assert!(
-            n == cap || (n >= t.min_spp && n < cap && n.is_power_of_two()),
-            "count {n} (min {}, cap {cap})",
-            t.min_spp
-        );
+    match t.target {
+        Target::Threshold(_) => {
+            for &n in &c {
+                assert!(
+                    n == cap || (n >= t.min_spp && n < cap && n.is_power_of_two()),
+                    "count {n} (min {}, cap {cap})",
+                    t.min_spp
+                );
+            }
+        }
+        Target::Mean(mean) => {
+            let m = c.iter().map(|&x| f64::from(x)).sum::<f64>() / c.len() as f64;
+            // Each count is rounded: the mean is off by half a sample at most.
+            assert!(
+                (m - f64::from(mean)).abs() <= 0.5,
+                "mean count {m}, asked {mean}"
+            );
+            assert!(c.iter().all(|&x| x >= 1 && x <= cap));
+        }
     }
     c
 }
@@ -61,10 +75,7 @@ fn adaptive_sampling_is_unbiased() {
     let scene = scene(&json);
     let ctx = context();
     let r = Renderer::new(ctx.clone());
-    let t = NoiseThreshold {
-        error: 0.06,
-        min_spp: 4,
-    };
+    let t = Adaptive::threshold(0.06, 4);
     // One light sample, light sampling only: noisy enough that the counts spread (8 to 256).
     let settings = RenderSettings {
         spp: CAP,
@@ -75,7 +86,7 @@ fn adaptive_sampling_is_unbiased() {
             light_samples: 1,
             ..Default::default()
         })),
-        noise_threshold: Some(t),
+        adaptive: Some(t),
         ..Default::default()
     };
     let c = counts(&render(&r, &scene, &settings), t, CAP);
@@ -119,23 +130,12 @@ fn adaptive_sampling_agrees_with_uniform_sampling() {
     let mut scene = illum::scene::load(&dir).unwrap_or_else(|e| panic!("{e}"));
     (scene.camera.width, scene.camera.height) = (24, 18);
     const CAP: u32 = 128;
-    let t = NoiseThreshold {
-        error: 0.05,
-        min_spp: 8,
-    };
     let uniform = RenderSettings {
         spp: CAP,
         seed: 9,
         trace: trace_mode(),
         ..Default::default()
     };
-    let adaptive = RenderSettings {
-        noise_threshold: Some(t),
-        seed: 10,
-        ..uniform.clone()
-    };
-    let c = counts(&render(&r, &scene, &adaptive), t, CAP);
-    assert!(c.iter().min() < c.iter().max(), "the counts must vary");
     let batches = |s: &RenderSettings| {
         Batches::render(
             &r,
@@ -147,25 +147,38 @@ fn adaptive_sampling_agrees_with_uniform_sampling() {
             BATCHES,
         )
     };
-    let (a, u) = (batches(&adaptive), batches(&uniform));
-    let tests = (a.mean.len() * 3) as f64;
+    let u = batches(&uniform);
+    let tests = (u.mean.len() * 3) as f64;
     let per = 1.0 - (1.0 - 0.01f64).powf(1.0 / tests);
     // Welch's dof is at least that of one batch set: the limit is conservative.
     let limit = t_for(per, f64::from(BATCHES - 1));
     let mut worst = 0.0f64;
-    for i in 0..a.mean.len() {
-        for ch in 0..3 {
-            let d = a.mean[i][ch] - u.mean[i][ch];
-            let sd = (a.var[i][ch] + u.var[i][ch]).sqrt();
-            let floor = 1e-5 * u.mean[i][ch].abs() + 1e-6;
-            worst = worst.max((d.abs() - floor).max(0.0) / sd.max(1e-300));
-            assert!(
-                d.abs() <= limit * sd + floor,
-                "pixel {i} channel {ch}: adaptive {} vs uniform {} (t = {:.2}, limit {limit:.2})",
-                a.mean[i][ch],
-                u.mean[i][ch],
-                d / sd
-            );
+    for t in [Adaptive::threshold(0.05, 8), Adaptive::mean(32, 8)] {
+        let adaptive = RenderSettings {
+            adaptive: Some(t),
+            seed: 10,
+            ..uniform.clone()
+        };
+        let c = counts(&render(&r, &scene, &adaptive), t, CAP);
+        assert!(
+            c.iter().min() < c.iter().max(),
+            "{t:?}: the counts must vary"
+        );
+        let a = batches(&adaptive);
+        for i in 0..a.mean.len() {
+            for ch in 0..3 {
+                let d = a.mean[i][ch] - u.mean[i][ch];
+                let sd = (a.var[i][ch] + u.var[i][ch]).sqrt();
+                let floor = 1e-5 * u.mean[i][ch].abs() + 1e-6;
+                worst = worst.max((d.abs() - floor).max(0.0) / sd.max(1e-300));
+                assert!(
+                    d.abs() <= limit * sd + floor,
+                    "{t:?}: pixel {i} channel {ch}: adaptive {} vs uniform {} (t = {:.2}, limit {limit:.2})",
+                    a.mean[i][ch],
+                    u.mean[i][ch],
+                    d / sd
+                );
+            }
         }
     }
     eprintln!("largest |t|: {worst:.2} (limit {limit:.2})");
@@ -183,10 +196,8 @@ fn the_noise_threshold_reaches_its_target() {
         s.camera.height = h;
         s
     };
-    let t = NoiseThreshold {
-        error: 0.05,
-        min_spp: 16,
-    };
+    const T: f64 = 0.05;
+    let t = Adaptive::threshold(T, 16);
     const CAP: u32 = 1024;
     for (name, scene) in [
         (
@@ -210,7 +221,7 @@ fn the_noise_threshold_reaches_its_target() {
             &r,
             &scene,
             &RenderSettings {
-                noise_threshold: Some(t),
+                adaptive: Some(t),
                 ..uniform(CAP, 3)
             },
         );
@@ -235,14 +246,14 @@ fn the_noise_threshold_reaches_its_target() {
         eprintln!(
             "{name}: relMSE {relmse:.3e} = {:.3} T², {mean_count:.1} samples a pixel on average \
              (min {}, max {})",
-            relmse / (t.error * t.error),
+            relmse / (T * T),
             c.iter().min().unwrap(),
             c.iter().max().unwrap()
         );
         assert!(
-            relmse <= t.error * t.error,
+            relmse <= T * T,
             "{name}: relMSE {relmse:.3e} above the target {:.3e}",
-            t.error * t.error
+            T * T
         );
         assert!(
             mean_count < f64::from(CAP) / 2.0,
@@ -271,42 +282,46 @@ fn adaptive_renders_split_and_merged_equal_one_render() {
     let ctx = context();
     let scene = scene(SMALL_SCENE);
     let r = Renderer::new(ctx.clone());
-    let t = NoiseThreshold {
-        error: 0.03,
-        min_spp: 8,
-    };
-    let settings = |samples, crop| RenderSettings {
-        spp: 600,
-        seed: 7,
-        trace: trace_mode(),
-        samples,
-        crop,
-        noise_threshold: Some(t),
-        ..Default::default()
-    };
-    let whole = render(&r, &scene, &settings(None, None));
-    let c = counts(&whole, t, 600);
-    assert!(c.iter().min() < c.iter().max(), "the counts must vary");
-    // Sample ranges: the last two start past the first block, so they render the first samples
-    // of their window's ring to decide the counts.
-    let ranges = [(0, 100), (100, 256), (256, 520), (520, 600)];
-    let parts: Vec<Part> = ranges
-        .iter()
-        .map(|&(a, b)| job(&r, &scene, &settings(Some((a, b)), None), &format!("s{a}")))
-        .collect();
-    assert_eq!(merge(&parts).unwrap().film, whole.film, "sample ranges");
-    let win = |x0, y0, x1, y1| Window { x0, y0, x1, y1 };
-    let tiles = [
-        win(0, 0, 5, 4),
-        win(5, 0, 13, 4),
-        win(0, 4, 7, 9),
-        win(7, 4, 13, 9),
-    ];
-    let parts: Vec<Part> = tiles
-        .iter()
-        .map(|w| job(&r, &scene, &settings(None, Some(*w)), &format!("c{w}")))
-        .collect();
-    assert_eq!(merge(&parts).unwrap().film, whole.film, "tiles");
+    for t in [Adaptive::threshold(0.03, 8), Adaptive::mean(64, 8)] {
+        let settings = |samples, crop| RenderSettings {
+            spp: 600,
+            seed: 7,
+            trace: trace_mode(),
+            samples,
+            crop,
+            adaptive: Some(t),
+            ..Default::default()
+        };
+        let whole = render(&r, &scene, &settings(None, None));
+        let c = counts(&whole, t, 600);
+        assert!(
+            c.iter().min() < c.iter().max(),
+            "{t:?}: the counts must vary"
+        );
+        // Sample ranges: unaligned ends, one inside a block, some past every pixel's count.
+        let ranges = [(0, 100), (100, 256), (256, 520), (520, 600)];
+        let parts: Vec<Part> = ranges
+            .iter()
+            .map(|&(a, b)| job(&r, &scene, &settings(Some((a, b)), None), &format!("s{a}")))
+            .collect();
+        assert_eq!(
+            merge(&parts).unwrap().film,
+            whole.film,
+            "{t:?}: sample ranges"
+        );
+        let win = |x0, y0, x1, y1| Window { x0, y0, x1, y1 };
+        let tiles = [
+            win(0, 0, 5, 4),
+            win(5, 0, 13, 4),
+            win(0, 4, 7, 9),
+            win(7, 4, 13, 9),
+        ];
+        let parts: Vec<Part> = tiles
+            .iter()
+            .map(|w| job(&r, &scene, &settings(None, Some(*w)), &format!("c{w}")))
+            .collect();
+        assert_eq!(merge(&parts).unwrap().film, whole.film, "{t:?}: tiles");
+    }
     assert_no_validation_messages(&ctx);
 }
 
@@ -330,6 +345,11 @@ fn the_command_line_checks_the_threshold_and_writes_the_counts() {
         (
             vec!["--noise-threshold", "0.1", "--spp", "16"],
             "needs --spp",
+        ),
+        (vec!["--adaptive", "--spp", "8"], "--adaptive spreads"),
+        (
+            vec!["--adaptive", "--noise-threshold", "0.1"],
+            "cannot be used with",
         ),
     ] {
         let mut all = vec!["render", "--width", "32", "-o", o, "--quiet"];
@@ -366,4 +386,33 @@ fn the_command_line_checks_the_threshold_and_writes_the_counts() {
             .map(|(_, v)| v.clone())
     };
     assert_eq!(attr("illum.noiseThreshold").as_deref(), Some("0.05"));
+    // A mean of 32 spread over the pixels: up to 16 x 32 each, 32 on average.
+    let (code, err) = illum_cli(&[
+        "render",
+        "--width",
+        "32",
+        "--adaptive",
+        "--spp",
+        "32",
+        "-o",
+        o,
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let img = illum::output::read_exr(&out).unwrap();
+    let (_, counts) = img
+        .channels
+        .iter()
+        .find(|(n, _)| n == "SampleCount")
+        .expect("a SampleCount channel");
+    let mean = counts.iter().map(|&c| f64::from(c)).sum::<f64>() / counts.len() as f64;
+    assert!((mean - 32.0).abs() <= 0.5, "mean count {mean}");
+    assert!(counts.iter().all(|&c| (4.0..=512.0).contains(&c)));
+    let attr = |k: &str| {
+        img.attributes
+            .iter()
+            .find(|(n, _)| n == k)
+            .map(|(_, v)| v.clone())
+    };
+    assert_eq!(attr("illum.adaptiveMeanSpp").as_deref(), Some("32"));
 }

@@ -331,9 +331,16 @@ pub fn image_metadata(
     for (name, value) in &s.integrator {
         extra.push((format!("illum.{name}"), value.clone()));
     }
-    if let Some(t) = settings.noise_threshold {
-        extra.push(("illum.noiseThreshold".into(), t.error.to_string()));
-        extra.push(("illum.minSpp".into(), t.min_spp.to_string()));
+    if let Some(a) = settings.adaptive {
+        match a.target {
+            crate::render::adaptive::Target::Threshold(t) => {
+                extra.push(("illum.noiseThreshold".into(), t.to_string()))
+            }
+            crate::render::adaptive::Target::Mean(n) => {
+                extra.push(("illum.adaptiveMeanSpp".into(), n.to_string()))
+            }
+        }
+        extra.push(("illum.minSpp".into(), a.min_spp.to_string()));
     }
     if let Some(c) = settings.clamp {
         extra.push(("illum.fireflyClamp".into(), format!("{c} (biased)")));

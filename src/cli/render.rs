@@ -21,17 +21,22 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "illum.exr")]
     pub output: PathBuf,
     /// Samples per pixel. [default: 16; with --time: no cap; with --noise-threshold: 4096, the
-    /// most a pixel takes]
+    /// most a pixel takes; with --adaptive: the mean]
     #[arg(long)]
     pub spp: Option<u32>,
-    /// Adaptive sampling: each pixel stops once its estimated relative error (RMS, from its
-    /// neighbours' first --min-spp samples) is below this, e.g. 0.02 for 2%; the EXR then holds
-    /// each pixel's count as SampleCount. [default: off]
-    #[arg(long, value_name = "T")]
+    /// Adaptive sampling: each pixel stops once its estimated relative RMS error (from a pilot
+    /// of --min-spp samples) is below this, e.g. 0.02 for 2%; the EXR then holds each pixel's
+    /// count as SampleCount. [default: off]
+    #[arg(long, value_name = "T", conflicts_with = "adaptive")]
     pub noise_threshold: Option<f64>,
-    /// With --noise-threshold: samples every pixel takes before its count is decided (a power of
-    /// two, 2 to 128).
-    #[arg(long, value_name = "N", default_value_t = crate::render::adaptive::NoiseThreshold::DEFAULT_MIN_SPP)]
+    /// Adaptive sampling at a budget: --spp is the mean count, spread over the pixels as their
+    /// noise measured by a pilot of --min-spp samples (the spread that minimises the image's
+    /// relMSE), each pixel from 1/8 to 16 times the mean.
+    #[arg(long)]
+    pub adaptive: bool,
+    /// With --noise-threshold or --adaptive: samples every pixel takes in the pilot that
+    /// decides its count (a power of two, 2 to 128).
+    #[arg(long, value_name = "N", default_value_t = crate::render::adaptive::Adaptive::DEFAULT_MIN_SPP)]
     pub min_spp: u32,
     /// Render for this many seconds (progressive passes) instead of a fixed sample count; --spp,
     /// if given, caps it.
@@ -112,12 +117,18 @@ fn parse_range(s: &str) -> std::result::Result<(u32, u32), String> {
 }
 
 impl RenderArgs {
-    fn noise_threshold(&self) -> Option<crate::render::adaptive::NoiseThreshold> {
-        self.noise_threshold
-            .map(|error| crate::render::adaptive::NoiseThreshold {
-                error,
-                min_spp: self.min_spp,
-            })
+    /// The sample grid (the most a pixel takes) and the adaptive sampling for `spp` samples
+    /// asked.
+    fn sampling(&self, spp: u32) -> (u32, Option<crate::render::adaptive::Adaptive>) {
+        use crate::render::adaptive::{Adaptive, MEAN_CEILING};
+        match self.noise_threshold {
+            Some(t) => (spp, Some(Adaptive::threshold(t, self.min_spp))),
+            None if self.adaptive => (
+                spp.saturating_mul(MEAN_CEILING).min(crate::film::MAX_SPP),
+                Some(Adaptive::mean(spp, self.min_spp)),
+            ),
+            None => (spp, None),
+        }
     }
 
     /// The files a render reads, which no output may replace.
@@ -180,8 +191,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         (Some(n), _) => n,
         (None, Some(_)) => 1 << 20,
         (None, None) if a.noise_threshold.is_some() => 4096,
+        (None, None) if a.adaptive => 64,
         (None, None) => 16,
     };
+    let (spp, adaptive) = a.sampling(spp);
     let settings = RenderSettings {
         integrator: a.integrator.integrator(&scene, a.technique.as_deref())?,
         spp,
@@ -192,7 +205,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
         clamp: a.clamp,
         memory_limit: a.memory_limit,
-        noise_threshold: a.noise_threshold(),
+        adaptive,
         cancel: Some(cancel),
         ..Default::default()
     };
@@ -467,6 +480,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
             bail!("--samples and --crop need --spp: the samples per pixel of the whole image")
         }
     };
+    let (spp, adaptive) = a.sampling(spp);
     check_outputs(&[("part", a.output.as_path())], &a.inputs())?;
     let scene = a.scene.load()?;
     let (samples, crop, label) = match a.part {
@@ -495,7 +509,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         trace: a.trace,
         clamp: a.clamp,
         memory_limit: a.memory_limit,
-        noise_threshold: a.noise_threshold(),
+        adaptive,
         cancel: Some(cancel),
         samples,
         crop,

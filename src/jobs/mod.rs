@@ -19,9 +19,9 @@ pub fn settings_text(s: &RenderSettings) -> String {
         s.integrator.identity(),
         s.clamp.map_or("off".into(), |c| c.to_string()),
         s.inject_non_finite,
-        s.noise_threshold.map_or(String::new(), |t| format!(
-            " noise_threshold={} min_spp={}",
-            t.error, t.min_spp
+        s.adaptive.map_or(String::new(), |a| format!(
+            " adaptive={:?} min_spp={}",
+            a.target, a.min_spp
         ))
     )
 }

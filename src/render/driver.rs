@@ -436,7 +436,7 @@ impl Blocking<'_> {
     /// the window and the ring of pixels around it, with a seed of their own
     /// ([`super::adaptive::pilot_seed`]): independent of the image's samples.
     fn pilot(&self, seed: u64) -> Result<()> {
-        let (Some(t), Some((_, _, ring))) = (self.settings.noise_threshold, self.adaptive) else {
+        let (Some(t), Some((_, _, ring))) = (self.settings.adaptive, self.adaptive) else {
             return Ok(());
         };
         let seed = super::adaptive::pilot_seed(seed);
@@ -456,8 +456,7 @@ impl Blocking<'_> {
     /// Decides every pixel's count from the pilot, which the device film holds, and uploads the
     /// pixels' end samples.
     fn decide_counts(&self, p: &mut Progress, first: u32) -> Result<()> {
-        let (Some(t), Some((ends, order, ring))) = (self.settings.noise_threshold, self.adaptive)
-        else {
+        let (Some(t), Some((ends, order, ring))) = (self.settings.adaptive, self.adaptive) else {
             return Ok(());
         };
         let block = film::download_window(self.ctx, self.film.device(), self.width, ring)?;
@@ -482,9 +481,21 @@ impl Blocking<'_> {
         let mut pixels: Vec<u32> = (w.y0..w.y1)
             .flat_map(|y| (w.x0..w.x1).map(move |x| y * self.width + x))
             .collect();
-        // Descending end, then in image order: each pass takes a prefix.
-        pixels.sort_by_key(|&i| (std::cmp::Reverse(e[i as usize]), i));
+        // Descending end, in buckets of ends within 2^(1/4) of each other, each in image order:
+        // each pass takes a prefix (the buckets with a pixel still sampling), and neighbours
+        // in the image stay neighbours in a dispatch (their rays and texels are alike).
+        let bucket = |end: u32| (f64::from(end).log2() * 4.0).floor() as i64;
+        pixels.sort_by_key(|&i| (std::cmp::Reverse(bucket(e[i as usize])), i));
+        // Each entry's bucket's largest end: non-increasing, as partition_point needs.
         p.ends = pixels.iter().map(|&i| e[i as usize]).collect();
+        let mut k = 0;
+        while k < p.ends.len() {
+            let b = bucket(p.ends[k]);
+            let len = p.ends[k..].iter().take_while(|&&x| bucket(x) == b).count();
+            let most = p.ends[k..k + len].iter().copied().max().unwrap_or(0);
+            p.ends[k..k + len].fill(most);
+            k += len;
+        }
         let last = p.ends.first().copied().unwrap_or(t.min_spp);
         self.ctx.write(ends, 0, &e)?;
         self.ctx.write(order, 0, &pixels)?;

@@ -224,7 +224,10 @@ impl Renderer {
         let mut setup = driver::Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
         // Adaptive sampling: each pixel's end sample (all of them until the counts are
         // decided) and the order in which the dispatches take the pixels.
-        let ends = match settings.noise_threshold {
+        let pilot = settings
+            .adaptive
+            .map(|a| adaptive::pilot_window(&a, window, w, h));
+        let ends = match settings.adaptive {
             Some(_) => {
                 let all = vec![u32::MAX; w as usize * h as usize];
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -276,9 +279,7 @@ impl Renderer {
             window,
             per_dispatch,
             loop_limited,
-            adaptive: ends
-                .as_ref()
-                .map(|(e, o)| (e, o, adaptive::ring(window, w, h))),
+            adaptive: ends.as_ref().zip(pilot).map(|((e, o), ring)| (e, o, ring)),
             height: h,
         };
         let (first, last) = run.blocks();

@@ -44,9 +44,10 @@ pub struct RenderSettings {
     /// Host memory the film may take, in bytes (None: what the machine has available); a
     /// render that would need more is refused before it starts (src/film/memory.rs).
     pub memory_limit: Option<u64>,
-    /// Adaptive sampling: each pixel stops when its estimated relative error reaches the target
-    /// (`spp` is then the most a pixel takes; src/render/adaptive.rs).
-    pub noise_threshold: Option<super::adaptive::NoiseThreshold>,
+    /// Adaptive sampling: each pixel's count decided from a pilot, by a noise threshold or as a
+    /// mean spread by the pixels' noise (`spp` is then the most a pixel takes;
+    /// src/render/adaptive.rs).
+    pub adaptive: Option<super::adaptive::Adaptive>,
 }
 
 impl RenderSettings {
@@ -77,7 +78,7 @@ impl RenderSettings {
             )));
         }
         self.integrator.check().map_err(Error::Invalid)?;
-        if let Some(t) = &self.noise_threshold {
+        if let Some(t) = &self.adaptive {
             t.check(self.spp).map_err(Error::Invalid)?;
         }
         if let Some(c) = self.clamp
@@ -132,7 +133,7 @@ impl RenderSettings {
             samples: None,
             crop: None,
             memory_limit: None,
-            noise_threshold: None,
+            adaptive: None,
         }
     }
 }
