@@ -23,7 +23,8 @@ fn render(r: &Renderer, scene: &Scene, s: &RenderSettings) -> RenderOutput {
 }
 
 /// The counts of an adaptive render: with a threshold, every one a power of two from the
-/// minimum, or the cap; with a mean, that mean on average.
+/// minimum, or the cap; with a mean, from an eighth of it to the cap (their cost, in rays, is
+/// that of the mean: src/render/adaptive.rs tests `spread`).
 fn counts(out: &RenderOutput, t: Adaptive, cap: u32) -> Vec<u32> {
     let c: Vec<u32> = out
         .film
@@ -44,13 +45,11 @@ fn counts(out: &RenderOutput, t: Adaptive, cap: u32) -> Vec<u32> {
             }
         }
         Target::Mean(mean) => {
-            let m = c.iter().map(|&x| f64::from(x)).sum::<f64>() / c.len() as f64;
-            // Each count is rounded: the mean is off by half a sample at most.
+            let lo = (mean / 8).max(1);
             assert!(
-                (m - f64::from(mean)).abs() <= 0.5,
-                "mean count {m}, asked {mean}"
+                c.iter().all(|&x| x >= lo && x <= cap),
+                "counts {c:?} (from {lo} to {cap})"
             );
-            assert!(c.iter().all(|&x| x >= 1 && x <= cap));
         }
     }
     c
@@ -386,7 +385,7 @@ fn the_command_line_checks_the_threshold_and_writes_the_counts() {
             .map(|(_, v)| v.clone())
     };
     assert_eq!(attr("illum.noiseThreshold").as_deref(), Some("0.05"));
-    // A mean of 32 spread over the pixels: up to 16 x 32 each, 32 on average.
+    // The cost of 32 samples a pixel, spread over the pixels: from 4 to 16 x 32 each.
     let (code, err) = illum_cli(&[
         "render",
         "--width",
@@ -405,9 +404,8 @@ fn the_command_line_checks_the_threshold_and_writes_the_counts() {
         .iter()
         .find(|(n, _)| n == "SampleCount")
         .expect("a SampleCount channel");
-    let mean = counts.iter().map(|&c| f64::from(c)).sum::<f64>() / counts.len() as f64;
-    assert!((mean - 32.0).abs() <= 0.5, "mean count {mean}");
     assert!(counts.iter().all(|&c| (4.0..=512.0).contains(&c)));
+    assert!(counts.iter().any(|&c| c != counts[0]), "the counts vary");
     let attr = |k: &str| {
         img.attributes
             .iter()

@@ -21,7 +21,7 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "illum.exr")]
     pub output: PathBuf,
     /// Samples per pixel. [default: 16; with --time: no cap; with --noise-threshold: 4096, the
-    /// most a pixel takes; with --adaptive: the mean]
+    /// most a pixel takes; with --adaptive: the budget, in samples a pixel]
     #[arg(long)]
     pub spp: Option<u32>,
     /// Adaptive sampling: each pixel stops once its estimated relative RMS error (from a pilot
@@ -29,9 +29,9 @@ pub struct RenderArgs {
     /// count as SampleCount. [default: off]
     #[arg(long, value_name = "T", conflicts_with = "adaptive")]
     pub noise_threshold: Option<f64>,
-    /// Adaptive sampling at a budget: --spp is the mean count, spread over the pixels as their
-    /// noise measured by a pilot of --min-spp samples (the spread that minimises the image's
-    /// relMSE), each pixel from 1/8 to 16 times the mean.
+    /// Adaptive sampling at a budget: the rays of --spp samples a pixel, spread over the pixels
+    /// as their noise and the cost of their samples, measured by a pilot of --min-spp samples
+    /// (the spread that minimises the image's relMSE), each pixel from 1/8 to 16 times --spp.
     #[arg(long)]
     pub adaptive: bool,
     /// With --noise-threshold or --adaptive: samples every pixel takes in the pilot that

@@ -108,22 +108,30 @@ impl Adaptive {
     }
 }
 
-/// Counts of `mean` samples a pixel on average spread as the square roots of the estimates
-/// `v` (NaN: the largest), from mean / MEAN_FLOOR to `cap`: the image's relMSE, the mean of
-/// v_p · min_spp / n_p, is least for a given total when n_p is proportional to sqrt(v_p).
-pub fn spread(v: &[f64], mean: u32, cap: u32) -> Vec<u32> {
+/// Counts that cost what `mean` samples a pixel would, spread as sqrt(v_p / c_p) for the
+/// estimates `v` (NaN: the largest) and each pixel's cost of a sample `c` (its rays), from
+/// mean / MEAN_FLOOR to `cap`: the image's relMSE, the mean of v_p · min_spp / n_p, is least for
+/// a given cost, the sum of c_p n_p, when n_p is proportional to sqrt(v_p / c_p).
+pub fn spread(v: &[f64], c: &[f64], mean: u32, cap: u32) -> Vec<u32> {
     let worst = v
         .iter()
         .copied()
         .filter(|x| !x.is_nan())
         .fold(0.0f64, f64::max);
+    let c: Vec<f64> = c.iter().map(|c| c.max(1.0)).collect();
     let s: Vec<f64> = v
         .iter()
-        .map(|&x| if x.is_nan() { worst } else { x.max(0.0) }.sqrt())
+        .zip(&c)
+        .map(|(&x, &c)| (if x.is_nan() { worst } else { x.max(0.0) } / c).sqrt())
         .collect();
-    let total = f64::from(mean) * s.len() as f64;
+    let total = f64::from(mean) * c.iter().sum::<f64>();
     let (lo, hi) = (f64::from((mean / MEAN_FLOOR).max(1)), f64::from(cap));
-    let sum = |l: f64| s.iter().map(|&x| (l * x).clamp(lo, hi)).sum::<f64>();
+    let sum = |l: f64| {
+        s.iter()
+            .zip(&c)
+            .map(|(&x, &c)| (l * x).clamp(lo, hi) * c)
+            .sum::<f64>()
+    };
     // The scale whose clamped counts add up to the total: the sum grows with it.
     let (mut a, mut b) = (0.0f64, 1.0f64);
     while sum(b) < total && b < 1e300 {
@@ -175,6 +183,7 @@ pub fn ring(window: Window, width: u32, height: u32) -> Window {
 pub fn pixel_ends(
     t: &Adaptive,
     first: &film::Resolved,
+    costs: &[f64],
     ring: Window,
     window: Window,
     (width, height): (u32, u32),
@@ -211,6 +220,7 @@ pub fn pixel_ends(
     };
     let mut pixels = Vec::with_capacity(decided.pixels());
     let mut estimates = Vec::with_capacity(decided.pixels());
+    let mut cost = Vec::with_capacity(decided.pixels());
     for y in decided.y0..decided.y1 {
         for x in decided.x0..decided.x1 {
             // The neighbours' mean: each estimate alone is one squared difference (a scaled χ²
@@ -231,6 +241,8 @@ pub fn pixel_ends(
                 own.max(local)
             });
             pixels.push((y * width + x) as usize);
+            let (lx, ly) = (x - ring.x0, y - ring.y0);
+            cost.push(costs[(ly * ring.width() + lx) as usize]);
         }
     }
     let counts = match t.target {
@@ -238,7 +250,7 @@ pub fn pixel_ends(
             .iter()
             .map(|&v| t.threshold_count(error, v, cap))
             .collect(),
-        Target::Mean(mean) => spread(&estimates, mean, cap),
+        Target::Mean(mean) => spread(&estimates, &cost, mean, cap),
     };
     let mut ends = vec![u32::MAX; width as usize * height as usize];
     for (p, c) in pixels.into_iter().zip(counts) {
@@ -280,15 +292,19 @@ mod tests {
     #[test]
     fn spread_counts_follow_the_standard_deviations_and_keep_the_mean() {
         // Standard deviations 1, 2, 4 and 8 (v their squares): counts in proportion.
-        let c = spread(&[1.0, 4.0, 16.0, 64.0], 60, 1000);
+        let one = [1.0; 4];
+        let c = spread(&[1.0, 4.0, 16.0, 64.0], &one, 60, 1000);
         assert_eq!(c, [16, 32, 64, 128]);
         // The floor (mean / 8) and the cap bind; the others share what is left.
-        let c = spread(&[0.0, 1.0, 1.0, 1e12], 64, 128);
+        let c = spread(&[0.0, 1.0, 1.0, 1e12], &one, 64, 128);
         assert_eq!(c, [8, 60, 60, 128]);
         // No estimate takes the largest.
-        assert_eq!(spread(&[f64::NAN, 1.0], 10, 100), [10, 10]);
+        assert_eq!(spread(&[f64::NAN, 1.0], &one[..2], 10, 100), [10, 10]);
         // Nothing to spread: every pixel at the floor.
-        assert_eq!(spread(&[0.0, 0.0], 64, 128), [8, 8]);
+        assert_eq!(spread(&[0.0, 0.0], &one[..2], 64, 128), [8, 8]);
+        // Equally noisy, one pixel's samples cost 4x: it takes half as many (sqrt(1/4)), at the
+        // cost of 100 samples each: 4 n + 2 n = 500, n = 83.3.
+        assert_eq!(spread(&[1.0, 1.0], &[4.0, 1.0], 100, 1000), [83, 167]);
     }
 
     #[test]

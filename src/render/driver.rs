@@ -469,9 +469,16 @@ impl Blocking<'_> {
         let mut sums = vec![0i128; block.len()];
         film::add_block(&mut sums, &block, film::channels(planes.len()));
         let r = film::resolve(&sums, &planes, ring.width(), ring.height(), t.min_spp);
+        // Each pixel's rays a sample: the cost of its samples.
+        let rays = crate::layout::FilmPixel::BEAUTY_SQ + 3;
+        let costs: Vec<f64> = sums
+            .chunks_exact(film::channels(planes.len()))
+            .map(|s| film::from_fixed(s[rays], rays) / f64::from(t.min_spp))
+            .collect();
         let e = super::adaptive::pixel_ends(
             &t,
             &r,
+            &costs,
             ring,
             self.window,
             (self.width, self.height),
