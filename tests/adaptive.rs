@@ -9,12 +9,10 @@ use common::*;
 use glam::DVec3;
 use illum::film::Window;
 use illum::integrators::{Direct, DirectLighting, Technique};
-use illum::jobs::partial::{read_partial, write_partial};
-use illum::jobs::{Part, merge, part_info};
+use illum::jobs::{Part, merge};
 use illum::render::adaptive::{Adaptive, Target};
 use illum::render::{RenderOutput, RenderSettings, Renderer};
 use illum::scene::Scene;
-use illum::stress::closed_form::polygon_irradiance;
 use std::path::Path;
 
 fn render(r: &Renderer, scene: &Scene, s: &RenderSettings) -> RenderOutput {
@@ -95,16 +93,7 @@ fn adaptive_sampling_is_unbiased() {
         lo < hi,
         "the counts must vary for this test to mean anything"
     );
-    let corners = [
-        DVec3::new(-s, h, -s),
-        DVec3::new(s, h, -s),
-        DVec3::new(s, h, s),
-        DVec3::new(-s, h, s),
-    ];
-    let irradiance = |p: DVec3| {
-        let rel: Vec<DVec3> = corners.iter().map(|c| *c - p).collect();
-        l * polygon_irradiance(DVec3::Y, &rel)
-    };
+    let irradiance = square_light_irradiance(l, h, s);
     let b = Batches::render(
         &r,
         &scene,
@@ -262,20 +251,6 @@ fn the_noise_threshold_reaches_its_target() {
     assert_no_validation_messages(&ctx);
 }
 
-/// Renders one job and writes it as a partial EXR, read back as a merge would.
-fn job(r: &Renderer, scene: &Scene, s: &RenderSettings, name: &str) -> Part {
-    let out = render(r, scene, s);
-    let path = temp_path(&format!("adaptive-{name}.exr"));
-    write_partial(
-        &path,
-        &part_info(scene, s, &out, "test").unwrap(),
-        &out.job.sums,
-    )
-    .unwrap();
-    let (info, sums) = read_partial(&path).unwrap();
-    Part { path, info, sums }
-}
-
 #[test]
 fn adaptive_renders_split_and_merged_equal_one_render() {
     let ctx = context();
@@ -301,7 +276,14 @@ fn adaptive_renders_split_and_merged_equal_one_render() {
         let ranges = [(0, 100), (100, 256), (256, 520), (520, 600)];
         let parts: Vec<Part> = ranges
             .iter()
-            .map(|&(a, b)| job(&r, &scene, &settings(Some((a, b)), None), &format!("s{a}")))
+            .map(|&(a, b)| {
+                render_part(
+                    &r,
+                    &scene,
+                    &settings(Some((a, b)), None),
+                    &format!("adaptive-s{a}"),
+                )
+            })
             .collect();
         assert_eq!(
             merge(&parts).unwrap().film,
@@ -317,7 +299,14 @@ fn adaptive_renders_split_and_merged_equal_one_render() {
         ];
         let parts: Vec<Part> = tiles
             .iter()
-            .map(|w| job(&r, &scene, &settings(None, Some(*w)), &format!("c{w}")))
+            .map(|w| {
+                render_part(
+                    &r,
+                    &scene,
+                    &settings(None, Some(*w)),
+                    &format!("adaptive-c{w}"),
+                )
+            })
             .collect();
         assert_eq!(merge(&parts).unwrap().film, whole.film, "{t:?}: tiles");
     }
@@ -357,60 +346,36 @@ fn the_command_line_checks_the_threshold_and_writes_the_counts() {
         assert_ne!(code, 0, "{args:?}");
         assert!(err.contains(expected), "{args:?}: {err}");
     }
-    let (code, err) = illum_cli(&[
-        "render",
-        "--width",
-        "32",
-        "--noise-threshold",
-        "0.05",
-        "--spp",
-        "64",
-        "-o",
-        o,
-        "--quiet",
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let img = illum::output::read_exr(&out).unwrap();
-    let (_, counts) = img
-        .channels
-        .iter()
-        .find(|(n, _)| n == "SampleCount")
-        .expect("a SampleCount channel");
+    // Renders the default scene 32 pixels wide with `flags`: its counts and a header attribute.
+    let render = |flags: &[&str], attribute: &str| {
+        let mut all = vec!["render", "--width", "32", "-o", o, "--quiet"];
+        all.extend(flags);
+        let (code, err) = illum_cli(&all);
+        assert_eq!(code, 0, "{flags:?}: {err}");
+        let img = illum::output::read_exr(&out).unwrap();
+        let counts = img
+            .channels
+            .iter()
+            .find(|(n, _)| n == "SampleCount")
+            .map(|(_, c)| c.clone())
+            .expect("a SampleCount channel");
+        let value = img
+            .attributes
+            .iter()
+            .find(|(n, _)| n == attribute)
+            .map(|(_, v)| v.clone());
+        (counts, value)
+    };
+    let (counts, t) = render(
+        &["--noise-threshold", "0.05", "--spp", "64"],
+        "illum.noiseThreshold",
+    );
     assert!(counts.iter().all(|&c| (16.0..=64.0).contains(&c)));
     assert!(counts.iter().any(|&c| c < 64.0), "some pixel stops early");
-    let attr = |k: &str| {
-        img.attributes
-            .iter()
-            .find(|(n, _)| n == k)
-            .map(|(_, v)| v.clone())
-    };
-    assert_eq!(attr("illum.noiseThreshold").as_deref(), Some("0.05"));
+    assert_eq!(t.as_deref(), Some("0.05"));
     // The cost of 32 samples a pixel, spread over the pixels: from 4 to 16 x 32 each.
-    let (code, err) = illum_cli(&[
-        "render",
-        "--width",
-        "32",
-        "--adaptive",
-        "--spp",
-        "32",
-        "-o",
-        o,
-        "--quiet",
-    ]);
-    assert_eq!(code, 0, "{err}");
-    let img = illum::output::read_exr(&out).unwrap();
-    let (_, counts) = img
-        .channels
-        .iter()
-        .find(|(n, _)| n == "SampleCount")
-        .expect("a SampleCount channel");
+    let (counts, n) = render(&["--adaptive", "--spp", "32"], "illum.adaptiveMeanSpp");
     assert!(counts.iter().all(|&c| (4.0..=512.0).contains(&c)));
     assert!(counts.iter().any(|&c| c != counts[0]), "the counts vary");
-    let attr = |k: &str| {
-        img.attributes
-            .iter()
-            .find(|(n, _)| n == k)
-            .map(|(_, v)| v.clone())
-    };
-    assert_eq!(attr("illum.adaptiveMeanSpp").as_deref(), Some("32"));
+    assert_eq!(n.as_deref(), Some("32"));
 }

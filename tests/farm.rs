@@ -6,8 +6,7 @@
 mod common;
 use common::*;
 use illum::cli::part::{Split, plan};
-use illum::jobs::partial::{read_partial, write_partial};
-use illum::jobs::{Part, merge, part_info};
+use illum::jobs::{Part, merge};
 use illum::render::{RenderSettings, Renderer};
 use std::path::Path;
 
@@ -41,16 +40,7 @@ fn parts_merge_bit_identical_whatever_n() {
                 .enumerate()
                 .map(|(k, j)| {
                     let s = settings(Some(j.samples), Some(j.crop));
-                    let out = r.render(&scene, &s, &mut |_, _| {}).unwrap();
-                    let path = temp_path(&format!("farm-{}-{k}-of-{n}.exr", split.name()));
-                    write_partial(
-                        &path,
-                        &part_info(&scene, &s, &out, "test").unwrap(),
-                        &out.job.sums,
-                    )
-                    .unwrap();
-                    let (info, sums) = read_partial(&path).unwrap();
-                    Part { path, info, sums }
+                    render_part(&r, &scene, &s, &format!("farm-{}-{k}-of-{n}", split.name()))
                 })
                 .collect();
             let merged =

@@ -6,7 +6,6 @@
 mod common;
 use common::*;
 use illum::film::Window;
-use illum::jobs::partial::{read_partial, write_partial};
 use illum::jobs::{Part, merge, part_info};
 use illum::render::{RenderSettings, Renderer};
 use illum::trace::TraceMode;
@@ -29,26 +28,6 @@ fn settings(
         crop,
         ..Default::default()
     }
-}
-
-/// Renders one job and writes it as a partial EXR, read back as a merge would.
-fn job(r: &Renderer, scene: &illum::scene::Scene, s: &RenderSettings, name: &str) -> Part {
-    let out = r
-        .render(scene, s, &mut |_, _| {})
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
-    let path = temp_path(&format!("{name}.exr"));
-    write_partial(
-        &path,
-        &part_info(scene, s, &out, "test").unwrap(),
-        &out.job.sums,
-    )
-    .unwrap();
-    let (info, sums) = read_partial(&path).unwrap();
-    assert_eq!(
-        sums, out.job.sums,
-        "{name}: the partial EXR reads back exactly"
-    );
-    Part { path, info, sums }
 }
 
 fn win(x0: u32, y0: u32, x1: u32, y1: u32) -> Window {
@@ -74,7 +53,7 @@ fn split_renders_merge_bit_identical_to_one_render() {
         let parts: Vec<Part> = ranges
             .iter()
             .map(|&(a, b)| {
-                job(
+                render_part(
                     &r,
                     &scene,
                     &settings(trace, 7, Some((a, b)), None),
@@ -98,7 +77,7 @@ fn split_renders_merge_bit_identical_to_one_render() {
         let parts: Vec<Part> = tiles
             .iter()
             .map(|w| {
-                job(
+                render_part(
                     &r,
                     &scene,
                     &settings(trace, 7, None, Some(*w)),
@@ -115,7 +94,7 @@ fn split_renders_merge_bit_identical_to_one_render() {
         let mut parts = Vec::new();
         for w in [win(0, 0, 13, 5), win(0, 5, 13, 9)] {
             for (a, b) in [(0, 301), (301, 600)] {
-                parts.push(job(
+                parts.push(render_part(
                     &r,
                     &scene,
                     &settings(trace, 7, Some((a, b)), Some(w)),
@@ -139,7 +118,7 @@ fn merge_rejects_parts_that_do_not_belong_together() {
     let r = Renderer::new(ctx.clone());
     let trace = TraceMode::Bvh;
     let part = |seed: u64, a: u32, b: u32, crop: Option<Window>, name: &str| {
-        job(&r, &scene, &settings(trace, seed, Some((a, b)), crop), name)
+        render_part(&r, &scene, &settings(trace, seed, Some((a, b)), crop), name)
     };
     let err = |parts: Vec<Part>| match merge(&parts) {
         Ok(_) => panic!("merged parts that do not belong together"),
@@ -171,7 +150,7 @@ fn merge_rejects_parts_that_do_not_belong_together() {
     // Another scene.
     let mut other = scene.clone();
     other.lights[0].intensity = 7.0;
-    let p = job(
+    let p = render_part(
         &r,
         &other,
         &settings(trace, 1, Some((300, 600)), None),

@@ -11,7 +11,7 @@ mod common;
 use common::*;
 use glam::DVec3;
 use illum::integrators::{Direct, DirectLighting, Technique};
-use illum::stress::closed_form::{dome_irradiance_quadrature, polygon_irradiance};
+use illum::stress::closed_form::dome_irradiance_quadrature;
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -44,16 +44,7 @@ fn stratified_light_and_brdf_samples_match_the_polygon_formula() {
     // A 4 x 4 rect 0.4 above the floor: from the floor under it, share = solid angle / 2 pi is
     // about 0.8, so 4 light samples (a 2 x 2 grid) where the default N_max is 4, 3 (3 x 1) at 3.
     let (l, h, s) = (2.0, 0.4, 2.0);
-    let corners = [
-        DVec3::new(-s, h, -s),
-        DVec3::new(s, h, -s),
-        DVec3::new(s, h, s),
-        DVec3::new(-s, h, s),
-    ];
-    let irradiance = |p: DVec3| {
-        let rel: Vec<DVec3> = corners.iter().map(|c| *c - p).collect();
-        l * polygon_irradiance(DVec3::Y, &rel)
-    };
+    let irradiance = square_light_irradiance(l, h, s);
     let scene = scene(&scene_json(
         &format!(
             r#"{{"rect": {{"center": [0, {h}, 0], "normal": [0, -1, 0], "size": [{}, {}]}}, "intensity": {l}}}"#,

@@ -1,19 +1,22 @@
-//! Adaptive pixel sampling (`--noise-threshold`): each pixel stops at the sample count at which
-//! its estimated relative error reaches the target (docs/adaptive-sampling.md).
+//! Adaptive pixel sampling: a pilot decides each pixel's count, by a noise threshold
+//! (`--noise-threshold`: each pixel stops where its estimated relative error reaches the target)
+//! or at a budget (`--adaptive`: the rays of N samples a pixel, spread as the pixels' noise and
+//! cost) (docs/adaptive-sampling.md).
 //!
-//! A pilot of `min_spp` samples per pixel, with a seed of its own and left out of the image,
+//! The pilot, `min_spp` samples per pixel with a seed of its own and left out of the image,
 //! estimates each pixel's relMSE from its half-buffers (the error of its stratified samples, not
 //! the s² / n of independent ones, which is 10x higher on scenes/bench/dome.json). A pixel's
 //! estimate v is the larger of its own and its eight neighbours' mean (the neighbours steady the
 //! estimate where the noise is smooth; its own catches what is noisy in it alone, a highlight a
-//! pixel wide); scaled as 1/n, it reaches T² at n = min_spp · v / T², rounded up to a power of
-//! two (whole (0,2)-nets of the camera samples) and capped by `--spp`.
+//! pixel wide). With a threshold, scaled as 1/n, v reaches T² at n = min_spp · v / T², rounded up
+//! to a power of two (whole (0,2)-nets of the camera samples) and capped by `--spp`; at a budget
+//! the counts follow sqrt(v / c) ([`spread`]).
 //!
 //! The pilot's samples are independent of the image's, so a pixel's count is independent of the
 //! samples it takes and the image stays unbiased; a rule that read the image's own samples
 //! would stop early exactly where they happened to agree. The pilot is deterministic, so every
-//! job of a split render decides the same counts (a crop renders the pilot over its window and
-//! the ring of pixels around it) and jobs merge bit-identically.
+//! job of a split render decides the same counts (it renders the pilot over [`pilot_window`])
+//! and jobs merge bit-identically.
 
 use crate::film::{self, Window};
 use crate::metrics::RELMSE_EPSILON;
@@ -23,8 +26,9 @@ use crate::metrics::RELMSE_EPSILON;
 pub enum Target {
     /// Each pixel stops when its estimated relative RMS error reaches this (relMSE T²).
     Threshold(f64),
-    /// The pixels take this many samples on average, spread as their estimated standard
-    /// deviations: the spread that minimises the image's relMSE for that many samples.
+    /// The pixels' samples cost (in rays) what this many samples a pixel would, spread as
+    /// sqrt(v / c) (v the estimated variance, c the cost of a sample): the spread that minimises
+    /// the image's relMSE for that cost.
     Mean(u32),
 }
 

@@ -343,7 +343,7 @@ impl Blocking<'_> {
             // The counts come from a pilot of samples of their own, left out of the image.
             let start = Instant::now();
             self.pilot(seed)?;
-            self.decide_counts(&mut p, first)?;
+            self.decide_counts(&mut p, first, &planes)?;
             film::clear(self.ctx, self.film.device())?;
             p.wall += start.elapsed().as_secs_f64();
             p.device += start.elapsed().as_secs_f64();
@@ -364,7 +364,9 @@ impl Blocking<'_> {
             self.report_pass(&mut p, &planes, evaluate, first, last)?;
         }
         let end = first + p.done;
-        if p.stop.is_some_and(|s| end >= s) && !p.interrupted {
+        // Adaptive sampling stopped every pixel: none of the range is left undone.
+        let stopped = p.stop.is_some_and(|s| end >= s) && !p.interrupted;
+        if stopped {
             // Adaptive sampling stopped every pixel inside a block: the block is complete (no
             // pixel takes more of it), so it leaves as a whole one would.
             let (start, block_end) = film::block_of(end.max(1) - 1, self.settings.spp);
@@ -390,12 +392,10 @@ impl Blocking<'_> {
         if !evaluate && let Some(r) = p.passes.last_mut() {
             evaluate_pass(r, &resolved, self.settings.reference.as_deref());
         }
-        // Adaptive sampling that stopped every pixel leaves none of the range undone.
-        let stopped = p.stop.is_some_and(|s| first + p.done >= s) && !p.interrupted;
         let covered = if stopped {
             self.range.1
         } else {
-            self.range.1.min(first + p.done)
+            self.range.1.min(end)
         };
         Ok(SeedOutput {
             range: (self.range.0, covered),
@@ -455,24 +455,19 @@ impl Blocking<'_> {
 
     /// Decides every pixel's count from the pilot, which the device film holds, and uploads the
     /// pixels' end samples.
-    fn decide_counts(&self, p: &mut Progress, first: u32) -> Result<()> {
+    fn decide_counts(&self, p: &mut Progress, first: u32, planes: &[String]) -> Result<()> {
         let (Some(t), Some((ends, order, ring))) = (self.settings.adaptive, self.adaptive) else {
             return Ok(());
         };
         let block = film::download_window(self.ctx, self.film.device(), self.width, ring)?;
-        let planes: Vec<String> = self
-            .setup
-            .aov_planes
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
+        let channels = film::channels(planes.len());
         let mut sums = vec![0i128; block.len()];
-        film::add_block(&mut sums, &block, film::channels(planes.len()));
-        let r = film::resolve(&sums, &planes, ring.width(), ring.height(), t.min_spp);
+        film::add_block(&mut sums, &block, channels);
+        let r = film::resolve(&sums, planes, ring.width(), ring.height(), t.min_spp);
         // Each pixel's rays a sample: the cost of its samples.
         let rays = crate::layout::FilmPixel::BEAUTY_SQ + 3;
         let costs: Vec<f64> = sums
-            .chunks_exact(film::channels(planes.len()))
+            .chunks_exact(channels)
             .map(|s| film::from_fixed(s[rays], rays) / f64::from(t.min_spp))
             .collect();
         let e = super::adaptive::pixel_ends(
@@ -495,13 +490,9 @@ impl Blocking<'_> {
         pixels.sort_by_key(|&i| (std::cmp::Reverse(bucket(e[i as usize])), i));
         // Each entry's bucket's largest end: non-increasing, as partition_point needs.
         p.ends = pixels.iter().map(|&i| e[i as usize]).collect();
-        let mut k = 0;
-        while k < p.ends.len() {
-            let b = bucket(p.ends[k]);
-            let len = p.ends[k..].iter().take_while(|&&x| bucket(x) == b).count();
-            let most = p.ends[k..k + len].iter().copied().max().unwrap_or(0);
-            p.ends[k..k + len].fill(most);
-            k += len;
+        for run in p.ends.chunk_by_mut(|a, b| bucket(*a) == bucket(*b)) {
+            let most = run.iter().copied().max().unwrap_or(0);
+            run.fill(most);
         }
         let last = p.ends.first().copied().unwrap_or(t.min_spp);
         self.ctx.write(ends, 0, &e)?;

@@ -224,18 +224,15 @@ impl Renderer {
         let mut setup = driver::Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
         // Adaptive sampling: each pixel's end sample (all of them until the counts are
         // decided) and the order in which the dispatches take the pixels.
-        let pilot = settings
-            .adaptive
-            .map(|a| adaptive::pilot_window(&a, window, w, h));
-        let ends = match settings.adaptive {
-            Some(_) => {
+        let adaptive = match settings.adaptive {
+            Some(a) => {
                 let all = vec![u32::MAX; w as usize * h as usize];
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
                 let ends = ctx.upload("pixel ends", &all, usage)?;
                 let order = ctx.upload("pixel order", &all, usage)?;
                 setup.frame.pixel_ends = ends.address;
                 setup.frame.pixel_order = order.address;
-                Some((ends, order))
+                Some((ends, order, adaptive::pilot_window(&a, window, w, h)))
             }
             None => None,
         };
@@ -279,7 +276,7 @@ impl Renderer {
             window,
             per_dispatch,
             loop_limited,
-            adaptive: ends.as_ref().zip(pilot).map(|((e, o), ring)| (e, o, ring)),
+            adaptive: adaptive.as_ref().map(|(e, o, pilot)| (e, o, *pilot)),
             height: h,
         };
         let (first, last) = run.blocks();

@@ -1,6 +1,8 @@
 //! Renders of test scenes on validated contexts, and what is read off them.
 
-use super::{assert_no_validation_messages, context, scene, trace_mode};
+use super::{assert_no_validation_messages, context, scene, temp_path, trace_mode};
+use illum::jobs::Part;
+use illum::jobs::partial::{read_partial, write_partial};
 use illum::render::{RenderOutput, RenderSettings, Renderer};
 use illum::scene::Scene;
 use illum::vk::Context;
@@ -107,3 +109,20 @@ pub const EXR_CHANNELS: [&str; 16] = [
     "Variance.G",
     "Variance.B",
 ];
+
+/// Renders one job of a split render and writes it as a partial EXR (`name`.exr in the test
+/// folder), read back as a merge would; the sums must read back exactly.
+pub fn render_part(r: &Renderer, scene: &Scene, s: &RenderSettings, name: &str) -> Part {
+    let out = r
+        .render(scene, s, &mut |_, _| {})
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let path = temp_path(&format!("{name}.exr"));
+    let info = illum::jobs::part_info(scene, s, &out, "test").unwrap();
+    write_partial(&path, &info, &out.job.sums).unwrap();
+    let (info, sums) = read_partial(&path).unwrap();
+    assert_eq!(
+        sums, out.job.sums,
+        "{name}: the partial EXR reads back exactly"
+    );
+    Part { path, info, sums }
+}

@@ -42,3 +42,20 @@ pub fn floor_points(pos: glam::DVec3, fov_deg: f64, w: u32, h: u32) -> Vec<Vec<g
     }
     out
 }
+
+/// The irradiance at a floor point p (normal +Y) from a square light of radiance `l` and side
+/// 2 `s`, facing down at height `h` above the origin: the polygon formula of
+/// `illum::stress::closed_form`.
+pub fn square_light_irradiance(l: f64, h: f64, s: f64) -> impl Fn(glam::DVec3) -> f64 + Copy {
+    use glam::DVec3;
+    let corners = [
+        DVec3::new(-s, h, -s),
+        DVec3::new(s, h, -s),
+        DVec3::new(s, h, s),
+        DVec3::new(-s, h, s),
+    ];
+    move |p: DVec3| {
+        let rel: Vec<DVec3> = corners.iter().map(|c| *c - p).collect();
+        l * illum::stress::closed_form::polygon_irradiance(DVec3::Y, &rel)
+    }
+}
