@@ -12,8 +12,9 @@ Mitsuba's convention): render that one with both renderers.
 
 A material (Lambert diffuse + one specular lobe, summed) becomes Mitsuba's blendbsdf at weight 1/2
 of the doubled components, which is their sum; Mitsuba's diffuse and roughconductor do not clamp
-reflectances above 1. Integrator: `direct` with 1 emitter and 1 BSDF sample per camera sample,
-`independent` sampler, box reconstruction filter (illum integrates a box pixel).
+reflectances above 1. Integrator: `direct` with 1 emitter and 1 BSDF sample per camera sample
+for an illum `direct` scene, `path` (max_depth as the scene's, -1 unless given) for a `path` or
+`full` one; `independent` sampler, box reconstruction filter (illum integrates a box pixel).
 
     to-mitsuba.py SCENE.json --spp N -o out.exr      # render (needs the mitsuba package)
     to-mitsuba.py SCENE.json --comparable OUT.json   # the convertible variant (no mitsuba needed)
@@ -170,16 +171,20 @@ def convert(path, spp=16, light_samples=1, bsdf_samples=1):
     _check_fields(s, {"$schema", "description", "camera", "integrator", "textures",
                       "materials", "shapes", "lights"}, path)
     integ = s.get("integrator", {})
-    if integ.get("type", "direct") != "direct":
-        raise Unsupported("integrator.type: %r (only direct converts)" % integ["type"])
+    kind = integ.get("type", "direct")
+    if kind not in ("direct", "path", "full"):
+        raise Unsupported("integrator.type: %r (direct, path and full convert)" % kind)
     cam = s["camera"]
     _check_fields(cam, {"position", "look_at", "up", "fov_y", "resolution"}, "camera")
     if "fov_y" not in cam:
         raise Unsupported("camera: only the look-at form converts")
     w, h = cam.get("resolution", [512, 512])
     d = {"type": "scene",
-         "integrator": {"type": "direct", "emitter_samples": light_samples,
-                        "bsdf_samples": bsdf_samples},
+         "integrator": ({"type": "direct", "emitter_samples": light_samples,
+                         "bsdf_samples": bsdf_samples} if kind == "direct" else
+                        # illum's path and full both render all light paths: Mitsuba's path,
+                        # max_depth counted alike (-1: unbounded).
+                        {"type": "path", "max_depth": int(integ.get("max_depth", -1))}),
          "sensor": {"type": "perspective", "fov_axis": "y", "fov": cam["fov_y"],
                     "to_world": ("look_at", cam["position"], cam["look_at"],
                                  cam.get("up", [0, 1, 0])),

@@ -96,6 +96,116 @@ fn the_furnace_reads_le_over_one_minus_rho() {
     assert_no_validation_messages(&ctx);
 }
 
+/// The full integrator with the course's split (caustics off).
+fn without_caustics(spp: u32) -> RenderSettings {
+    let mut s = settings("full", spp);
+    s.integrator = Full {
+        caustics: false,
+        ..Default::default()
+    }
+    .into();
+    s
+}
+
+/// The furnace around a ball of D-BRDF conductor with F = 1 and microfacet alpha `alpha` (0: a
+/// mirror, whose albedo is exactly 1, so that every pixel still reads Le / (1 - rho)).
+fn furnace_around(rho: f64, alpha: f64) -> Scene {
+    scene(&format!(
+        r#"{{"camera": {{"position": [0.3, 0.2, 1.5], "look_at": [0, 0, 0], "fov_y": 90, "resolution": [12, 12]}},
+             "materials": {{"shell": {{"diffuse": [{rho}, {rho}, {rho}], "emission": [1, 1, 1], "two_sided": true}},
+                            "ball": {{"diffuse": [0, 0, 0], "specular": [{{"model": "dbrdf", "roughness": {alpha}, "fresnel": {{"constant": [1, 1, 1]}}}}]}}}},
+             "shapes": {{"shell": {{"sphere": {{"center": [0, 0, 0], "radius": 2}}, "material": "shell"}},
+                         "ball": {{"sphere": {{"center": [0, 0, 0], "radius": 0.8}}, "material": "ball"}}}}}}"#
+    ))
+}
+
+/// Light that reaches the shell through the ball (L S D ...): a mirror ball of albedo 1 inside
+/// the furnace leaves its radiance Le / (1 - rho) everywhere, for path and full, per 4x4-pixel
+/// block; full with the course's split (caustics off) reads less (the power check). A rough
+/// ball (alpha 0.1, whose albedo falls short of 1 at grazing angles) against path.
+#[test]
+fn a_glossy_ball_in_the_furnace_keeps_its_light() {
+    let ctx = context();
+    let seeds: Vec<u64> = (1..=6).collect();
+    let rho = 0.8;
+    let truth = 1.0 / (1.0 - rho);
+    let s = furnace_around(rho, 0.0);
+    let k = (seeds.len() - 1) as f64;
+    let outside = |outs: &[RenderOutput], bias: f64| {
+        let blocks = mean_and_error(outs, 4);
+        let t = t_for(1.0 - (1.0f64 - 1e-3).powf(1.0 / blocks.len() as f64), k);
+        blocks
+            .iter()
+            .find(|(m, se)| (m - truth).abs() > bias + t * se)
+            .copied()
+    };
+    // The cache's lag (radiosity.rs) bounds full's bias: 1e-3 of the indirect light.
+    let lag = 1e-3 * (truth - 1.0);
+    for (what, st, bias) in [
+        ("path", settings("path", 16), 0.0),
+        ("full", settings("full", 16), lag),
+    ] {
+        let outs = render_seeds(&ctx, &s, &st, &seeds);
+        assert_eq!(outside(&outs, bias), None, "{what}: a block is off {truth}");
+    }
+    let off = render_seeds(&ctx, &s, &without_caustics(16), &seeds);
+    let dark = outside(&off, lag).expect("the course's split reads Le / (1 - rho) too");
+    assert!(dark.0 < truth, "{dark:?}");
+    let s = furnace_around(rho, 0.1);
+    let full = render_seeds(&ctx, &s, &settings("full", 16), &seeds);
+    let path = render_seeds(&ctx, &s, &settings("path", 16), &seeds);
+    if let Some(e) = blocks_disagree(&full, &path, lag / truth, 4) {
+        panic!("rough ball, full vs path: {e}");
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// A mirror ball on a diffuse floor under a small rect light, at 32x24: its caustic (L S D E)
+/// and the floor it reflects onto the floor (L D S D E).
+fn caustic_scene() -> Scene {
+    scene(
+        r#"{"camera": {"position": [0, 1.4, 1.7], "look_at": [0, 0.25, 0], "fov_y": 50, "resolution": [32, 24]},
+            "materials": {"floor": {"diffuse": [0.8, 0.8, 0.8]},
+                          "mirror": {"diffuse": [0, 0, 0], "specular": [{"model": "dbrdf", "roughness": 0, "fresnel": {"constant": [0.95, 0.95, 0.95]}}]}},
+            "shapes": {"floor": {"rect": {"center": [0, 0, 0], "normal": [0, 1, 0], "size": [8, 8]}, "material": "floor"},
+                       "ball": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "mirror"}},
+            "lights": {"key": {"rect": {"center": [0.9, 2.0, -0.4], "normal": [0, -1, 0], "size": [0.5, 0.5]}, "color": [1, 1, 1], "intensity": 30}}}"#,
+    )
+}
+
+/// A mirror ball's caustic on a diffuse floor: full against path by 8x8-pixel blocks (Welch's
+/// t, family-wise 1e-3, plus the cache's stated bias); full with the course's split (caustics
+/// off) must fail the same comparison (the power check).
+#[test]
+fn a_mirror_balls_caustic_agrees_with_path() {
+    let ctx = context();
+    let seeds: Vec<u64> = (1..=8).collect();
+    let s = caustic_scene();
+    let path = render_seeds(&ctx, &s, &settings("path", 256), &seeds);
+    let full = render_seeds(&ctx, &s, &settings("full", 256), &seeds);
+    if let Some(e) = blocks_disagree(&full, &path, CACHE_BIAS, 8) {
+        panic!("full vs path: {e}");
+    }
+    let off = render_seeds(&ctx, &s, &without_caustics(256), &seeds);
+    assert!(
+        blocks_disagree(&off, &path, CACHE_BIAS, 8).is_some(),
+        "the course's split agrees with path: the comparison cannot see the caustic"
+    );
+    assert_no_validation_messages(&ctx);
+}
+
+/// Where no surface has a specular lobe, the caustic paths are left out with nothing to do: a
+/// diffuse-only room renders bit for bit the same with them on and off.
+#[test]
+fn caustic_paths_cost_nothing_without_specular_lobes() {
+    let ctx = context();
+    let s = interior(true);
+    let on = render_seeds(&ctx, &s, &settings("full", 4), &[5]);
+    let off = render_seeds(&ctx, &s, &without_caustics(4), &[5]);
+    assert_eq!(on[0].film, off[0].film);
+    assert_no_validation_messages(&ctx);
+}
+
 /// An open plane under a uniform dome sees nothing but the dome, which direct lighting has:
 /// indirect light adds exactly nothing, in both integrators, on a diffuse and glossy plane.
 #[test]
@@ -144,23 +254,34 @@ fn interior(diffuse_only: bool) -> Scene {
     scene(&v.to_string())
 }
 
-/// Compares 6x6-pixel block means of two renders, each over several seeds: every block within
-/// `bias` (relative) plus Welch's t limit from the seeds' scatter, family-wise level 1e-3.
-fn assert_blocks_agree(a: &[RenderOutput], b: &[RenderOutput], bias: f64, what: &str) {
-    let (ma, mb) = (mean_and_error(a, 6), mean_and_error(b, 6));
+/// Compares block x block pixel means of two renders, each over several seeds: every block
+/// within `bias` (relative) plus Welch's t limit from the seeds' scatter, family-wise level 1e-3.
+/// The first block outside, or None.
+fn blocks_disagree(
+    a: &[RenderOutput],
+    b: &[RenderOutput],
+    bias: f64,
+    block: u32,
+) -> Option<String> {
+    let (ma, mb) = (mean_and_error(a, block), mean_and_error(b, block));
     let per = 1.0 - (1.0f64 - 1e-3).powf(1.0 / ma.len() as f64);
     let (ka, kb) = ((a.len() - 1) as f64, (b.len() - 1) as f64);
-    for (i, (x, y)) in ma.iter().zip(&mb).enumerate() {
+    ma.iter().zip(&mb).enumerate().find_map(|(i, (x, y))| {
         let t = t_for(per, welch_dof(&[(x.1 * x.1, ka), (y.1 * y.1, kb)]));
         let limit = bias * y.0.abs() + t * (x.1 * x.1 + y.1 * y.1).sqrt();
-        assert!(
-            (x.0 - y.0).abs() <= limit,
-            "{what}: block {i}: {:.5} +- {:.5} vs {:.5} +- {:.5} (limit {limit:.2e})",
-            x.0,
-            x.1,
-            y.0,
-            y.1
-        );
+        ((x.0 - y.0).abs() > limit).then(|| {
+            format!(
+                "block {i}: {:.5} +- {:.5} vs {:.5} +- {:.5} (limit {limit:.2e})",
+                x.0, x.1, y.0, y.1
+            )
+        })
+    })
+}
+
+/// 6x6-pixel blocks of two renders agree (blocks_disagree).
+fn assert_blocks_agree(a: &[RenderOutput], b: &[RenderOutput], bias: f64, what: &str) {
+    if let Some(e) = blocks_disagree(a, b, bias, 6) {
+        panic!("{what}: {e}");
     }
 }
 

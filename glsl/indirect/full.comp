@@ -12,8 +12,10 @@
 // indirect light by the reflection integrator (Reflection): a specular chain of up to
 // frame.specular_depth BRDF-sampled bounces, each reflected point shaded like a camera hit (direct
 // lighting in full, its indirect diffuse through the cache). Rays that reach a light or the sky add
-// nothing: direct lighting has them. Paths light -> specular -> diffuse -> eye (caustics) are left
-// out, as in the course.
+// nothing: direct lighting has them. With INTEGRATOR_CAUSTICS the diffuse chain also goes on
+// through the specular lobes it meets (full_diffuse_hit, lobe_chain_next), keeping the paths the
+// course leaves out: light -> specular -> diffuse (caustics, and glossy surfaces seen by diffuse
+// bounces).
 //
 // Update pass (FULL_PASS_UPDATE, src/integrators/indirect/radiosity.rs): one path per block x block
 // pixels (gl_GlobalInvocationID.xy) and update index (pc.update.index + gl_GlobalInvocationID.z): a
@@ -117,12 +119,15 @@ struct FullPath {
     float angle, width, width_v;
     Hit next;
     vec3 o_next, d_next;
-    // The diffuse chain from the path vertex: its sum, throughput and vertex count.
+    // The diffuse chain from the path vertex: its sum, throughput, vertex count and ray cone
+    // (a diffuse bounce starts one; a specular bounce through a glossy hit widens it).
     vec3 sum_d, thr_d;
     uint vertex_d;
-    // This iteration: direct lighting at the hit (of its diffuse lobe only), the end of the
-    // diffuse chain, a BRDF-sampled bounce from the path vertex.
-    bool shade, diffuse_only, diffuse_over, bounce;
+    float width_d, angle_d;
+    // This iteration: direct lighting at the hit (of its diffuse lobe only, or of its specular
+    // lobes only where the cache gave the diffuse lobe's), the end of the diffuse chain, a
+    // BRDF-sampled bounce from the path vertex.
+    bool shade, diffuse_only, specular_only, diffuse_over, bounce;
 };
 
 // Sample `sample_index`'s camera ray (update: through a random point of the path's block, from a
@@ -157,36 +162,52 @@ FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, out Rng r
     p.sum_d = vec3(0.0);
     p.thr_d = vec3(1.0);
     p.vertex_d = 0u;
+    p.width_d = 0.0;
+    p.angle_d = frame.diffuse_spread;
     return p;
 }
 
-// A hit of the diffuse chain (RAY_DIFFUSE, RAY_NEXT): the cached value where the segment is
-// longer than the cell, else direct lighting of its diffuse lobe in place; or the chain's end.
-void full_diffuse_hit(bool cache, bool material, inout FullPath p, inout Rng rng) {
+// Whether the diffuse chain goes on through the specular lobes of material m (the light that
+// reaches a diffuse surface through glossy and specular ones, L S+ D ...).
+bool full_glossy(GpuMaterial m) {
+    return (frame.integrator_flags & INTEGRATOR_CAUSTICS) != 0u && m.lobe_count > 0u;
+}
+
+// A hit of the diffuse chain (RAY_DIFFUSE, RAY_NEXT), material m: the cached B where the segment
+// is longer than the cell, else direct lighting of its diffuse lobe in place; and where it has
+// specular lobes, their direct light and a bounce from them (with the diffuse lobe's, in place);
+// or the chain's end.
+void full_diffuse_hit(bool cache, bool material, GpuMaterial m, inout FullPath p, inout Rng rng) {
     if (p.ray == RAY_NEXT) {
         p.next = p.h;
         p.o_next = p.o;
         p.d_next = p.d;
     }
     p.diffuse_over = true;
-    if (!(material && p.vertex_d < RADIOSITY_BRUTE_MAX && max3(p.sh.albedo) > 0.0)) return;
-    float w = p.h.t * frame.diffuse_spread;
+    if (!(material && p.vertex_d < RADIOSITY_BRUTE_MAX)) return;
+    bool diffuse = max3(p.sh.albedo) > 0.0;
+    bool glossy = full_glossy(m);
+    if (!(diffuse || glossy)) return;
+    p.width_d += p.h.t * p.angle_d;
+    float w = p.width_d;
     vec3 b;
-    if (cache && p.h.t > radiosity_cell_size(radiosity_level(w)) && radiosity_lookup(p.sh, w, rng, b)) {
+    if (diffuse && cache && p.h.t > radiosity_cell_size(radiosity_level(w)) && radiosity_lookup(p.sh, w, rng, b)) {
         p.sum_d += p.thr_d * b;
-    } else {
+        if (!glossy) return;
+        p.specular_only = true;
+    } else if (!glossy) {
         p.diffuse_only = true;
-        p.shade = true;
-        p.diffuse_over = false;
     }
+    p.shade = true;
+    p.diffuse_over = false;
 }
 
 // What this iteration does with its hit (surface s, with a material or not), by the kind of ray:
 // false where the path ends. The film's camera hit records its AOVs; the update pass's takes the
 // first bounce.
-bool full_visit(bool update, bool cache, Surface s, bool material, inout FullPath p, inout FilmPixel acc,
-                inout Rng rng) {
-    p.shade = p.diffuse_only = p.diffuse_over = p.bounce = false;
+bool full_visit(bool update, bool cache, Surface s, bool material, GpuMaterial m, inout FullPath p,
+                inout FilmPixel acc, inout Rng rng) {
+    p.shade = p.diffuse_only = p.specular_only = p.diffuse_over = p.bounce = false;
     if (p.ray == RAY_CAMERA && !update) {
         film_camera_aovs(p.h, s, material, p.sh, p.d, acc, p.le);
         p.shade = material;
@@ -208,7 +229,7 @@ bool full_visit(bool update, bool cache, Surface s, bool material, inout FullPat
         if (!material) return false;
         p.shade = true;
     } else {
-        full_diffuse_hit(cache, material, p, rng);
+        full_diffuse_hit(cache, material, m, p, rng);
     }
     return true;
 }
@@ -225,6 +246,8 @@ void full_path_vertex(bool update, vec3 dl, inout FullPath p, inout FilmPixel ac
     p.sum_d = vec3(0.0);
     p.thr_d = vec3(1.0);
     p.vertex_d = 0u;
+    p.width_d = 0.0;
+    p.angle_d = frame.diffuse_spread;
     p.diffuse_over = true;
     if (max3(p.sh.albedo) > 0.0) p.diffuse_over = !diffuse_direction(p.sh, rng, p.d);
     p.ray = update ? RAY_NEXT : RAY_DIFFUSE;
@@ -327,8 +350,9 @@ void main() {
                     material = true;
                 }
             }
-            if (!full_visit(update, cache, s, material, p, px.acc, rng)) break;
+            if (!full_visit(update, cache, s, material, m, p, px.acc, rng)) break;
             if (p.diffuse_only) m.lobe_count = 0u;
+            if (p.specular_only) p.sh.albedo = vec3(0.0);
             vec3 dl = p.shade ? direct_lighting(p.sh, m, rng, rays) : vec3(0.0);
             // The hit becomes the path vertex where it is lit as one (and at the update pass's
             // first bounce); else a lit hit is a vertex of the diffuse chain.
@@ -338,7 +362,14 @@ void main() {
                 full_path_vertex(update, dl, p, px.acc, rng);
             } else if (p.shade) {
                 // A vertex of the diffuse chain: its direct light, then the next bounce.
-                p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d);
+                if (full_glossy(m)) {
+                    p.diffuse_over = !lobe_chain_next(p.sh, m, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d,
+                                                      p.width_d, p.angle_d);
+                } else {
+                    p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d);
+                    p.width_d = 0.0;
+                    p.angle_d = frame.diffuse_spread;
+                }
                 p.ray = RAY_DIFFUSE;
             }
             if (p.diffuse_over && update) {

@@ -127,6 +127,35 @@ Bounce sample_bounce(Shading sh, GpuMaterial m, bool diffuse, bool specular, ino
     return b;
 }
 
+// A vertex of the diffuse chain whose material has specular lobes (full.comp, with
+// INTEGRATOR_CAUSTICS): adds its direct light dl to sum with throughput thr, then bounces from its
+// lobes (sh.albedo zero where the cache gave the diffuse lobe's light: from the specular lobes
+// only), widening the ray cone (width, angle) as a specular bounce does or starting a new one at
+// a diffuse bounce; false when the chain ends there (as diffuse_chain_next).
+bool lobe_chain_next(Shading sh, GpuMaterial m, vec3 dl, inout vec3 sum, inout vec3 thr, inout uint vertex,
+                     inout Rng rng, out vec3 wi, inout float width, inout float angle) {
+    sum += thr * dl;
+    Bounce b = sample_bounce(sh, m, true, true, rng);
+    wi = b.wi;
+    bool go = b.valid;
+    if (go) {
+        thr *= b.weight;
+        if (vertex >= 2u) {
+            float q = min(max3(thr), 0.95);
+            go = rng_next(rng) < q;
+            thr /= q;
+        }
+        if (b.diffuse) {
+            width = 0.0;
+            angle = b.spread;
+        } else {
+            angle += b.spread;
+        }
+    }
+    vertex += 1u;
+    return go;
+}
+
 // ---------------------------------------------------------------------------------------------
 // The radiosity cache: a hashed grid of cells at power-of-two sizes, keyed by cell coordinates,
 // level and the normal's dominant signed axis (both sides of a thin wall, and two walls meeting

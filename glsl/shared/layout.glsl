@@ -133,6 +133,10 @@
 // Frame.integrator_flags: the diffuse lobe also takes cosine-sampled BRDF samples under MIS (the
 // course lights diffuse with light samples only).
 #define INTEGRATOR_DIFFUSE_MIS 1
+// Frame.integrator_flags (full): the diffuse chain also goes on through the specular lobes of the
+// surfaces it meets, so that light reaching a diffuse surface through glossy and specular ones
+// (L S+ D ...) is kept; off: the course's split, which leaves it out.
+#define INTEGRATOR_CAUSTICS 2
 // Frame.control_variates (with FEATURE_CONTROL_VARIATES): the course's average visibility
 // (biased, consistent) or its leave-one-out form (unbiased).
 #define CONTROL_VARIATES_AVGVIS 1

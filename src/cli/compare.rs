@@ -22,9 +22,9 @@ pub struct CompareArgs {
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub techniques: Option<Vec<Technique>>,
     /// Integrators to compare, comma separated, each once: any of `illum render --integrator`
-    /// (direct, full, path), or full-nocache (the full integrator's partition by brute force,
-    /// --radiosity-cache off). Each renders with each technique. [default: the one --integrator
-    /// names]
+    /// (direct, full, path), full-nocache (the full integrator's partition by brute force,
+    /// --radiosity-cache off) or full-nocaustics (the course's split, --param caustics=off). Each
+    /// renders with each technique. [default: the one --integrator names]
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pub integrators: Vec<String>,
     /// Sample allocations to compare, comma separated: L/B (light samples / BRDF samples per
@@ -106,7 +106,10 @@ type Alias = (
     &'static [(&'static str, &'static str)],
 );
 
-const ALIASES: &[Alias] = &[("full-nocache", "full", &[("radiosity_cache", "off")])];
+const ALIASES: &[Alias] = &[
+    ("full-nocache", "full", &[("radiosity_cache", "off")]),
+    ("full-nocaustics", "full", &[("caustics", "off")]),
+];
 
 fn alias_names() -> String {
     let n: Vec<&str> = ALIASES.iter().map(|a| a.0).collect();

@@ -138,6 +138,10 @@ pub struct Full {
     /// New cache generations during the render, at samples 1, 2, 4, … (false: the warm-up's
     /// table serves every sample, as in a render session; src/render/session.rs).
     pub radiosity_refresh: bool,
+    /// The diffuse chain also goes on through the specular lobes it meets, so that light that
+    /// reaches a diffuse surface through glossy or specular ones (L S+ D ...) is kept (false: the
+    /// course's split, which leaves it out).
+    pub caustics: bool,
 }
 
 impl Default for Full {
@@ -147,12 +151,18 @@ impl Default for Full {
             specular_depth: 4,
             radiosity_cache: true,
             radiosity_refresh: true,
+            caustics: true,
         }
     }
 }
 
 impl Full {
-    pub const PARAMS: &[&str] = &["specular_depth", "radiosity_cache", "radiosity_refresh"];
+    pub const PARAMS: &[&str] = &[
+        "specular_depth",
+        "radiosity_cache",
+        "radiosity_refresh",
+        "caustics",
+    ];
 
     pub fn parse(p: &Params) -> std::result::Result<Full, String> {
         let d = Full::default();
@@ -161,6 +171,7 @@ impl Full {
             specular_depth: p.get("specular_depth", d.specular_depth)?,
             radiosity_cache: p.get_switch("radiosity_cache", d.radiosity_cache)?,
             radiosity_refresh: p.get_switch("radiosity_refresh", d.radiosity_refresh)?,
+            caustics: p.get_switch("caustics", d.caustics)?,
         };
         it.check()?;
         p.finish("full", &[Full::PARAMS, DirectLighting::PARAMS].concat())?;
@@ -191,6 +202,9 @@ impl Integrator for Full {
         self.lighting.configure(frame);
         frame.specular_depth = self.specular_depth;
         frame.diffuse_spread = DIFFUSE_SPREAD;
+        if self.caustics {
+            frame.integrator_flags |= INTEGRATOR_CAUSTICS;
+        }
     }
 
     fn features(&self) -> u32 {
@@ -207,8 +221,13 @@ impl Integrator for Full {
                 ""
             } else {
                 "radiosity_refresh=off "
-            }
-        );
+            },
+        ) + if self.caustics {
+            // Always named: parts of earlier versions, which left this light out, do not merge.
+            "caustics=on "
+        } else {
+            "caustics=off "
+        };
         self.lighting.identity("full", &own)
     }
 
