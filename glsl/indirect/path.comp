@@ -37,54 +37,83 @@ void main() {
     uint max_depth = frame.max_depth;
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint samples = film_sample_count(pc, pixel);
-    for (uint k = 0u; k < samples; ++k) {
-        uint sample_index = pc.first_sample + k;
-        Rng rng;
-        vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);
-        vec3 o = frame.cam_origin.xyz;
-        vec3 le = vec3(0.0), direct = vec3(0.0), rest = vec3(0.0), thr = vec3(1.0);
-        bool first_diffuse = false;
-        GpuMaterial m;
-        Shading sh;
-        uint mask = MASK_GEOMETRY | MASK_LIGHTS;
-        // One ray and one vertex per iteration (the camera hit is vertex 1): the kernel holds one
-        // closest-hit traversal and one direct_lighting() (full.comp says why). Direct lighting
-        // at vertex `depth` takes depth + 1 segments.
-        for (uint depth = 1u;; ++depth) {
-            Hit h = trace_closest(o, d, 0.0, INF, mask);
-            rays += 1u;
-            bool shade = true;
-            if (depth == 1u) {
-                if (!film_camera_hit(h, o, d, acc, le, m, sh)) break;
-                shade = max_depth >= 2u;
-            } else {
-                if (h.kind == HIT_NONE) break;
-                Surface s = surface_at(h, o, d);
-                if (s.material == NONE) break;
+    // One loop over the vertices of all the pixel's samples: where a path ends, the next sample
+    // starts in the same iteration order (path regeneration, Novák et al. 2010), so that the
+    // lanes of a SIMD group wait for the longest sum of path lengths, not for the longest path
+    // of every sample. Each sample's arithmetic, random numbers and order are as in a loop per
+    // sample: the same pixels bit for bit. One ray and one vertex per iteration (the camera hit
+    // is vertex 1): the kernel holds one closest-hit traversal and one direct_lighting()
+    // (full.comp says why). Direct lighting at vertex `depth` takes depth + 1 segments.
+    uint k = 0u;
+    uint depth = 0u;   // 0: sample k starts
+    uint sample_index;
+    Rng rng;
+    vec3 o, d, le, direct, rest, thr;
+    bool first_diffuse;
+    GpuMaterial m;
+    Shading sh;
+    uint mask;
+    while (k < samples) {
+        if (depth == 0u) {
+            sample_index = pc.first_sample + k;
+            d = film_camera_ray(pc, pix, pixel, sample_index, rng);
+            o = frame.cam_origin.xyz;
+            le = direct = rest = vec3(0.0);
+            thr = vec3(1.0);
+            first_diffuse = false;
+            mask = MASK_GEOMETRY | MASK_LIGHTS;
+            depth = 1u;
+        }
+        Hit h = trace_closest(o, d, 0.0, INF, mask);
+        rays += 1u;
+        bool go = true;
+        bool shade = true;
+        if (depth == 1u) {
+            go = film_camera_hit(h, o, d, acc, le, m, sh);
+            shade = max_depth >= 2u;
+        } else if (h.kind == HIT_NONE) {
+            go = false;
+        } else {
+            Surface s = surface_at(h, o, d);
+            go = s.material != NONE;
+            if (go) {
                 m = get_material(s.material);
                 sh = shading_at(s, m, d);
             }
+        }
+        if (go) {
             vec3 dl = shade ? direct_lighting(sh, m, rng, rays) : vec3(0.0);
             if (depth == 1u) direct = film_clamp(dl, acc);
             else rest += thr * dl;
-            if (!(depth < PATH_MAX_VERTICES && depth + 2u <= max_depth)) break;
-            Bounce b = sample_bounce(sh, m, true, true, rng);
-            if (!b.valid) break;
-            if (depth == 1u) first_diffuse = b.diffuse;
-            thr *= b.weight;
-            if (depth >= 3u) {
-                float q = min(max3(thr), 0.95);
-                if (rng_next(rng) >= q) break;
-                thr /= q;
-            }
-            o = sh.origin;
-            d = b.wi;
-            mask = MASK_OCCLUDERS;
+            go = depth < PATH_MAX_VERTICES && depth + 2u <= max_depth;
         }
+        if (go) {
+            Bounce b = sample_bounce(sh, m, true, true, rng);
+            go = b.valid;
+            if (go) {
+                if (depth == 1u) first_diffuse = b.diffuse;
+                thr *= b.weight;
+                if (depth >= 3u) {
+                    float q = min(max3(thr), 0.95);
+                    go = rng_next(rng) < q;
+                    thr /= q;
+                }
+                o = sh.origin;
+                d = b.wi;
+                mask = MASK_OCCLUDERS;
+            }
+        }
+        if (go) {
+            depth += 1u;
+            continue;
+        }
+        // Sample k is complete.
         vec3 beauty = le + direct + rest;
         if (!film_add(acc, sample_index, beauty, le)) le = direct = rest = vec3(0.0);
         a_direct.rgb += le + direct;
         if (first_diffuse) a_indirect.rgb += rest; else a_reflection.rgb += rest;
+        k += 1u;
+        depth = 0u;
     }
     acc.beauty_sq.w += float(rays);
     film[pixel] = acc;
