@@ -7,6 +7,7 @@
 #   - slurm-wlm and munge, for the single-node Slurm that scripts/test-slurm.sh starts (no
 #     daemon is enabled or started here; Debian's packages start none without a slurm.conf)
 #   - python3-venv, and kubernetes-validate (PyPI, pinned) in .venv-k8s/ for scripts/test-k8s.sh
+#   - maturin, numpy, pytest and OpenEXR (PyPI, pinned) in .venv-py/ for the Python module
 #   - Debian's stock Mesa 22.3.6 lavapipe (no ray query) unpacked under .vk/mesa-stock, so the
 #     compute-BVH path can be tested on a real device that lacks the extension.
 set -euo pipefail
@@ -78,5 +79,13 @@ venv="$here/.venv-k8s"
 if [ ! -x "$venv/bin/kubernetes-validate" ]; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install -q --disable-pip-version-check kubernetes-validate==1.37.0
+fi
+# The Python module (python/, `import illum`): maturin builds it, pytest runs its tests against
+# the CLI, OpenEXR reads both renders' files (scripts/test.sh builds and installs the wheel).
+pyvenv="$here/.venv-py"
+if [ ! -x "$pyvenv/bin/maturin" ]; then
+  python3 -m venv "$pyvenv"
+  "$pyvenv/bin/pip" install -q --disable-pip-version-check maturin==1.16.0 numpy==2.4.6 \
+    pytest==9.2.0 OpenEXR==3.5.3
 fi
 echo "setup-debian: ok (mesa $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers); stock lavapipe at $stock)"

@@ -8,6 +8,7 @@ export CARGO_TERM_COLOR=never
 
 cargo fmt --all -- --check
 cargo clippy --release --all-targets -- -D warnings
+cargo clippy --release -p illum-python -- -D warnings
 scripts/test-k8s.sh
 
 echo "== Mesa 25 lavapipe (bookworm-backports), trace path auto"
@@ -22,6 +23,13 @@ scripts/test-slurm.sh
 echo "== Mesa 25 lavapipe, the other trace paths forced"
 ILLUM_TEST_TRACE=rayquery cargo test --release --test render --test direct --test report --test updates
 ILLUM_TEST_TRACE=bvh cargo test --release --test render --test direct --test report --test cli
+
+echo "== The Python module (python/, import illum): built by maturin, tested by pytest"
+# Against the CLI built above, with the validation layers on (any message fails a test).
+rm -rf target/wheels
+.venv-py/bin/maturin build --release --quiet -m python/Cargo.toml -o target/wheels
+.venv-py/bin/pip install -q --disable-pip-version-check --force-reinstall --no-deps target/wheels/illum-*.whl
+ILLUM_VALIDATION=1 ILLUM_BIN="$PWD/target/release/illum" .venv-py/bin/python -m pytest -q -p no:cacheprovider python/tests
 
 echo "== Debian's stock Mesa 22.3.6 lavapipe: no VK_KHR_ray_query, so the compute BVH"
 # Everything that can differ on this driver (the compute BVH, one sample per dispatch, no

@@ -200,17 +200,7 @@ impl IntegratorArgs {
     /// The parameters for integrator `name`: the scene's (when its section names that integrator
     /// or none), then these options over them.
     pub fn params(&self, name: &str, scene: &Scene) -> Result<Params> {
-        let mut p = Params::new();
-        let c = &scene.integrator;
-        if c.name.as_deref().is_none_or(|n| n == name) {
-            let file = scene
-                .source
-                .as_ref()
-                .map_or_else(|| "the scene".to_string(), |s| s.display().to_string());
-            for (k, v) in &c.params {
-                p.set(k, v, format!("{file}: integrator.{k}"));
-            }
-        }
+        let mut p = crate::integrators::scene_params(name, scene);
         let options: [(&str, Option<String>); 10] = [
             ("light_samples", self.light_samples.map(|v| v.to_string())),
             ("brdf_samples", self.brdf_samples.map(|v| v.to_string())),

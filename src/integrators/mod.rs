@@ -60,6 +60,24 @@ pub fn create(name: &str, params: &Params) -> Result<Arc<dyn Integrator>, String
     (r.create)(params)
 }
 
+/// The parameters a scene's `integrator` section gives integrator `name` (none when the section
+/// names another one), each named by its origin: what every front end (the CLI, Python) starts
+/// from before its own options.
+pub fn scene_params(name: &str, scene: &crate::scene::Scene) -> Params {
+    let mut p = Params::new();
+    let c = &scene.integrator;
+    if c.name.as_deref().is_none_or(|n| n == name) {
+        let file = scene
+            .source
+            .as_ref()
+            .map_or_else(|| "the scene".to_string(), |s| s.display().to_string());
+        for (k, v) in &c.params {
+            p.set(k, v, format!("{file}: integrator.{k}"));
+        }
+    }
+    p
+}
+
 /// The default integrator with its default parameters.
 pub fn default_integrator() -> Arc<dyn Integrator> {
     Arc::new(Direct::default())

@@ -1,0 +1,68 @@
+"""Type stubs of illum's native module (python/src/lib.rs)."""
+from os import PathLike
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+class IllumError(Exception):
+    """Bad input (the message names the file, field and value), an unusable device, a failed write."""
+
+class Scene:
+    """A validated scene."""
+
+    @staticmethod
+    def from_dict(d: dict[str, Any], base_dir: str | PathLike[str] | None = None) -> Scene:
+        """A scene from a dict of the JSON scene format, validated as a scene file is."""
+    @property
+    def resolution(self) -> tuple[int, int]:
+        """The camera's (width, height)."""
+    def render(
+        self,
+        spp: int | None = None,
+        time: float | None = None,
+        seed: int = 0,
+        integrator: str | None = None,
+        width: int | None = None,
+        height: int | None = None,
+        trace: str = "auto",
+        device: str | None = None,
+        report: bool = False,
+        **params: Any,
+    ) -> Render:
+        """Renders as `illum render` does with the same settings (the same pixels bit for bit).
+
+        `params` are the integrator's parameters (`--param NAME=VALUE`; booleans for on/off).
+        Ctrl-C stops the render and returns the samples done (`Render.interrupted`)."""
+
+class Render:
+    """A render's planes as float32 arrays (height, width[, 3]), its header and its report."""
+
+    beauty: npt.NDArray[np.float32]
+    albedo: npt.NDArray[np.float32]
+    normal: npt.NDArray[np.float32]
+    depth: npt.NDArray[np.float32]
+    emission: npt.NDArray[np.float32]
+    variance: npt.NDArray[np.float32] | None
+    samples: npt.NDArray[np.float32]
+    aovs: dict[str, npt.NDArray[np.float32]]
+    metadata: dict[str, str]
+    report: dict[str, npt.NDArray[np.float64]]
+    spp: int
+    interrupted: bool
+    @property
+    def resolution(self) -> tuple[int, int]: ...
+    def write(self, path: str | PathLike[str]) -> None:
+        """Writes an EXR (every plane, the header of `illum render`) or, for .png, a PNG."""
+
+def load(path: str | PathLike[str]) -> Scene:
+    """Loads and validates a scene file (JSON or glTF)."""
+
+def default_scene() -> Scene:
+    """The built-in default scene."""
+
+def devices() -> list[dict[str, Any]]:
+    """Every Vulkan device illum sees (what `illum devices` prints)."""
+
+def validation_messages() -> list[str]:
+    """The Vulkan validation layers' messages so far (with ILLUM_VALIDATION=1)."""

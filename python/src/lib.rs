@@ -1,0 +1,456 @@
+//! `illum._illum`, the native half of the Python package `illum` (python/illum/ re-exports it):
+//! scenes loaded and validated by the library, rendered by its one driver (`Renderer::render`,
+//! as `illum render` does) into NumPy arrays that take the film's own planes without a copy.
+//! Errors are `illum.IllumError` with the message the CLI prints; rendering releases the GIL,
+//! and Ctrl-C stops a render, which then returns the samples it has (as the CLI writes them).
+
+use illum::film::{AovPlane, Film};
+use illum::output::ImageMetadata;
+use illum::render::{RenderOutput, RenderSettings, Renderer};
+use illum::trace::TraceMode;
+use illum::vk::{Context, ContextOptions};
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+create_exception!(
+    _illum,
+    IllumError,
+    PyException,
+    "A failure of illum: bad input (the message names the file, field and value, as `illum` \
+     prints it), a device illum cannot use, or a failed write."
+);
+
+/// The error as the CLI prints it (`illum: error: {e:#}`, without the prefix).
+fn err(e: impl Into<anyhow::Error>) -> PyErr {
+    IllumError::new_err(format!("{:#}", e.into()))
+}
+
+thread_local! {
+    /// One device context per thread and device choice, made by the first render that asks for
+    /// it (its kernels and pipeline cache then serve every later render).
+    static CONTEXTS: RefCell<Vec<(Option<String>, Context)>> = const { RefCell::new(Vec::new()) };
+}
+
+fn context(device: &Option<String>) -> illum::Result<Context> {
+    CONTEXTS.with(|c| {
+        let mut c = c.borrow_mut();
+        if let Some((_, ctx)) = c.iter().find(|(d, _)| d == device) {
+            return Ok(ctx.clone());
+        }
+        let ctx = Context::new(&ContextOptions {
+            device: device.clone(),
+            validation: false,
+        })?;
+        c.push((device.clone(), ctx.clone()));
+        Ok(ctx)
+    })
+}
+
+/// Marks data that stays on the calling thread while the GIL is released (`Python::detach` runs
+/// its closure on this same thread): the device context and the render's callbacks.
+struct SameThread<T>(T);
+// SAFETY: `detach` runs the closure on the thread that called it and returns before that thread
+// runs any Python code again, so the wrapped value never crosses threads.
+unsafe impl<T> Send for SameThread<T> {}
+
+/// A validated scene (`illum.load`, `Scene.from_dict`).
+#[pyclass(module = "illum", frozen)]
+struct Scene {
+    inner: illum::scene::Scene,
+}
+
+/// The value of a keyword parameter as the integrator reads it: booleans as on/off.
+fn param_text(v: &Bound<'_, PyAny>) -> PyResult<String> {
+    if let Ok(b) = v.extract::<bool>() {
+        return Ok(if b { "on" } else { "off" }.to_string());
+    }
+    Ok(v.str()?.to_string())
+}
+
+#[pymethods]
+impl Scene {
+    /// A scene from a dict of the JSON scene format (docs/scene-format.md), validated as a scene
+    /// file is; relative paths are resolved against `base_dir` (default: the working folder).
+    #[staticmethod]
+    #[pyo3(signature = (d, base_dir=None))]
+    fn from_dict(
+        py: Python<'_>,
+        d: &Bound<'_, PyAny>,
+        base_dir: Option<PathBuf>,
+    ) -> PyResult<Scene> {
+        let text: String = py.import("json")?.call_method1("dumps", (d,))?.extract()?;
+        let base = match base_dir {
+            Some(b) => b,
+            None => std::env::current_dir().map_err(err)?,
+        };
+        let inner = illum::scene::from_json_str(&text, "the scene dict", &base).map_err(err)?;
+        Ok(Scene { inner })
+    }
+
+    /// The camera's resolution, (width, height).
+    #[getter]
+    fn resolution(&self) -> (u32, u32) {
+        (self.inner.camera.width, self.inner.camera.height)
+    }
+
+    /// Renders the scene, as `illum render` does with the same settings (the same pixels bit
+    /// for bit). `integrator` and `**params` as `--integrator` and `--param NAME=VALUE` (booleans
+    /// for on/off); `width`/`height` as `--width`/`--height`; `report=True` evaluates every pass
+    /// (the error-against-time arrays). Ctrl-C stops the render: the result then holds the
+    /// samples done (`interrupted` is True).
+    #[pyo3(signature = (spp=None, time=None, seed=0, integrator=None, width=None, height=None,
+                        trace="auto", device=None, report=false, **params))]
+    #[allow(clippy::too_many_arguments)]
+    fn render(
+        &self,
+        py: Python<'_>,
+        spp: Option<u32>,
+        time: Option<f64>,
+        seed: u64,
+        integrator: Option<String>,
+        width: Option<u32>,
+        height: Option<u32>,
+        trace: &str,
+        device: Option<String>,
+        report: bool,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Render> {
+        let mut scene = self.inner.clone();
+        scene
+            .camera
+            .set_resolution(width, height)
+            .map_err(|e| err(anyhow::anyhow!(e)))?;
+        let name = integrator
+            .or_else(|| scene.integrator.name.clone())
+            .unwrap_or_else(|| illum::integrators::default_integrator().name().to_string());
+        let mut p = illum::integrators::scene_params(&name, &scene);
+        if let Some(kw) = params {
+            for (k, v) in kw.iter() {
+                let k: String = k.extract()?;
+                let text = param_text(&v)?;
+                p.set(&k, &text, format!("render({k}={})", v.repr()?));
+            }
+        }
+        let integrator =
+            illum::integrators::create(&name, &p).map_err(|e| err(anyhow::anyhow!(e)))?;
+        let trace: TraceMode = trace
+            .parse()
+            .map_err(|e: String| err(anyhow::anyhow!("trace={trace:?}: {e}")))?;
+        let cancel = Arc::new(AtomicBool::new(false));
+        let settings = RenderSettings {
+            integrator,
+            // As `illum render`: 16 spp, or without a cap under a time budget.
+            spp: spp.unwrap_or(if time.is_some() { 1 << 20 } else { 16 }),
+            time,
+            seed,
+            trace,
+            evaluate_passes: report,
+            cancel: Some(cancel.clone()),
+            ..Default::default()
+        };
+        let ctx = context(&device).map_err(err)?;
+        let job = SameThread((ctx, scene, settings));
+        let (out, device_name, settings, stopped) = py
+            .detach(move || {
+                let SameThread((ctx, scene, settings)) = job;
+                let mut stopped = false;
+                let r = Renderer::new(ctx.clone()).render(&scene, &settings, &mut |_, _| {
+                    // Python's SIGINT handler runs here; KeyboardInterrupt stops the render.
+                    if !stopped && Python::attach(|py| py.check_signals()).is_err() {
+                        stopped = true;
+                        cancel.store(true, Ordering::SeqCst);
+                    }
+                });
+                SameThread((r, ctx.info().name.clone(), settings, stopped))
+            })
+            .0;
+        let out = out.map_err(err)?;
+        let meta = illum::cli::image_metadata(&out, &settings, &device_name);
+        Render::new(py, out, meta, stopped)
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner.camera;
+        format!("<illum.Scene {}x{}>", c.width, c.height)
+    }
+}
+
+/// Loads and validates a scene file (JSON or glTF), as `illum render FILE` does.
+#[pyfunction]
+fn load(path: PathBuf) -> PyResult<Scene> {
+    let inner = illum::scene::load(&path).map_err(err)?;
+    Ok(Scene { inner })
+}
+
+/// The built-in default scene (what `illum render` renders without a scene file).
+#[pyfunction]
+fn default_scene() -> Scene {
+    Scene {
+        inner: illum::scene::default_scene(),
+    }
+}
+
+/// Every Vulkan device illum sees, as dicts (what `illum devices` prints).
+#[pyfunction]
+fn devices(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+    let list = py.detach(illum::vk::list_devices).map_err(err)?;
+    let out = PyList::empty(py);
+    for d in list {
+        let e = PyDict::new(py);
+        e.set_item("index", d.index)?;
+        e.set_item("name", d.name)?;
+        e.set_item("kind", d.kind)?;
+        e.set_item("driver", d.driver)?;
+        e.set_item("api_version", d.api_version)?;
+        e.set_item("device_local_memory", d.device_local_memory)?;
+        e.set_item("ray_query", d.ray_query)?;
+        e.set_item("missing", d.missing)?;
+        out.append(e)?;
+    }
+    Ok(out)
+}
+
+/// The Vulkan validation layers' messages so far, of every device context of this thread (with
+/// ILLUM_VALIDATION=1; the tests fail on any).
+#[pyfunction]
+fn validation_messages() -> Vec<String> {
+    CONTEXTS.with(|c| {
+        c.borrow()
+            .iter()
+            .flat_map(|(_, ctx)| ctx.validation_messages())
+            .collect()
+    })
+}
+
+/// Reinterprets RGB triples as their floats without copying.
+fn flat(v: Vec<[f32; 3]>) -> Vec<f32> {
+    let mut v = std::mem::ManuallyDrop::new(v);
+    let (ptr, len, cap) = (v.as_mut_ptr(), v.len(), v.capacity());
+    // SAFETY: [f32; 3] is three f32s with f32's alignment, so the allocation of `cap` triples
+    // is exactly the allocation of 3 * cap floats (same size and alignment), `len` triples of
+    // which are initialised.
+    unsafe { Vec::from_raw_parts(ptr.cast::<f32>(), len * 3, cap * 3) }
+}
+
+/// A render's result: NumPy float32 arrays (height, width[, 3]) holding the film's planes, the
+/// metadata of its EXR header and its error-against-time report.
+#[pyclass(module = "illum", frozen)]
+struct Render {
+    #[pyo3(get)]
+    beauty: Py<PyAny>,
+    #[pyo3(get)]
+    albedo: Py<PyAny>,
+    #[pyo3(get)]
+    normal: Py<PyAny>,
+    /// Distance along the camera ray (+inf where nothing was hit).
+    #[pyo3(get)]
+    depth: Py<PyAny>,
+    #[pyo3(get)]
+    emission: Py<PyAny>,
+    /// The per-pixel variance of the beauty mean, or None.
+    #[pyo3(get)]
+    variance: Py<PyAny>,
+    /// Samples each pixel took.
+    #[pyo3(get)]
+    samples: Py<PyAny>,
+    /// The integrator's AOV planes by name (e.g. Direct, IndirectDiffuse, Reflection).
+    #[pyo3(get)]
+    aovs: Py<PyDict>,
+    /// What the EXR header holds, as strings by attribute name.
+    #[pyo3(get)]
+    metadata: Py<PyDict>,
+    /// One entry per pass (with report=True; else the last): arrays spp, wall_seconds,
+    /// device_seconds, estimated_relmse (NaN where unknown).
+    #[pyo3(get)]
+    report: Py<PyDict>,
+    /// Samples per pixel rendered.
+    #[pyo3(get)]
+    spp: u32,
+    /// Whether Ctrl-C stopped the render early.
+    #[pyo3(get)]
+    interrupted: bool,
+    width: u32,
+    height: u32,
+    /// The EXR header, for `write`.
+    meta: ImageMetadata,
+    /// Whether the film had a variance plane and per-pixel counts.
+    has_counts: bool,
+}
+
+impl Render {
+    fn new(
+        py: Python<'_>,
+        out: RenderOutput,
+        meta: ImageMetadata,
+        stopped: bool,
+    ) -> PyResult<Render> {
+        let RenderOutput {
+            film,
+            stats,
+            passes,
+            ..
+        } = out;
+        let (w, h) = (film.width as usize, film.height as usize);
+        let rgb = |v: Vec<[f32; 3]>| -> PyResult<Py<PyAny>> {
+            Ok(PyArray1::from_vec(py, flat(v))
+                .reshape([h, w, 3])?
+                .into_any()
+                .unbind())
+        };
+        let mono = |v: Vec<f32>| -> PyResult<Py<PyAny>> {
+            Ok(PyArray1::from_vec(py, v)
+                .reshape([h, w])?
+                .into_any()
+                .unbind())
+        };
+        let has_counts = film.samples.is_some();
+        let counts = film
+            .samples
+            .unwrap_or_else(|| vec![stats.spp as f32; w * h]);
+        let aovs = PyDict::new(py);
+        for AovPlane { name, rgb: plane } in film.aovs {
+            aovs.set_item(name, rgb(plane)?)?;
+        }
+        let md = PyDict::new(py);
+        md.set_item("illum.spp", meta.spp.to_string())?;
+        md.set_item("illum.seed", meta.seed.to_string())?;
+        md.set_item("illum.device", meta.device.clone())?;
+        md.set_item("illum.renderSeconds", format!("{:.6}", meta.render_seconds))?;
+        md.set_item("illum.setupSeconds", format!("{:.6}", meta.setup_seconds))?;
+        for (k, v) in &meta.extra {
+            md.set_item(k, v)?;
+        }
+        let rep = PyDict::new(py);
+        let col = |f: &dyn Fn(&illum::render::PassReport) -> f64| -> Py<PyAny> {
+            PyArray1::from_vec(py, passes.iter().map(f).collect::<Vec<f64>>())
+                .into_any()
+                .unbind()
+        };
+        rep.set_item("spp", col(&|p| f64::from(p.spp)))?;
+        rep.set_item("wall_seconds", col(&|p| p.wall_seconds))?;
+        rep.set_item("device_seconds", col(&|p| p.device_seconds))?;
+        rep.set_item(
+            "estimated_relmse",
+            col(&|p| p.estimated_relmse.unwrap_or(f64::NAN)),
+        )?;
+        Ok(Render {
+            beauty: rgb(film.beauty)?,
+            albedo: rgb(film.albedo)?,
+            normal: rgb(film.normal)?,
+            depth: mono(film.depth)?,
+            emission: rgb(film.emission)?,
+            variance: match film.variance {
+                Some(v) => rgb(v)?,
+                None => py.None(),
+            },
+            samples: mono(counts)?,
+            aovs: aovs.unbind(),
+            metadata: md.unbind(),
+            report: rep.unbind(),
+            spp: stats.spp,
+            interrupted: stopped || stats.interrupted,
+            width: film.width,
+            height: film.height,
+            meta,
+            has_counts,
+        })
+    }
+
+    /// The film the arrays hold now (copied out of them).
+    fn film(&self, py: Python<'_>) -> PyResult<Film> {
+        let rgb = |a: &Py<PyAny>| -> PyResult<Vec<[f32; 3]>> {
+            let a = a.bind(py).cast::<numpy::PyArray3<f32>>()?.try_readonly()?;
+            let s = a.as_slice()?;
+            Ok(s.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        };
+        let mono = |a: &Py<PyAny>| -> PyResult<Vec<f32>> {
+            let a = a.bind(py).cast::<numpy::PyArray2<f32>>()?.try_readonly()?;
+            Ok(a.as_slice()?.to_vec())
+        };
+        let mut aovs = Vec::new();
+        for (k, v) in self.aovs.bind(py).iter() {
+            aovs.push(AovPlane {
+                name: k.extract()?,
+                rgb: rgb(&v.unbind())?,
+            });
+        }
+        Ok(Film {
+            width: self.width,
+            height: self.height,
+            beauty: rgb(&self.beauty)?,
+            albedo: rgb(&self.albedo)?,
+            normal: rgb(&self.normal)?,
+            depth: mono(&self.depth)?,
+            emission: rgb(&self.emission)?,
+            variance: if self.variance.is_none(py) {
+                None
+            } else {
+                Some(rgb(&self.variance)?)
+            },
+            samples: if self.has_counts {
+                Some(mono(&self.samples)?)
+            } else {
+                None
+            },
+            aovs,
+        })
+    }
+}
+
+#[pymethods]
+impl Render {
+    /// Writes the image as `illum render -o PATH` does: an EXR (every plane, the same header),
+    /// or a PNG (tone-mapped beauty) for a .png path; written to a temporary file and renamed.
+    fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let film = self.film(py)?;
+        let png = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let r = if png {
+            illum::output::write_png(&path, &film)
+        } else {
+            illum::output::write_exr(&path, &film, &self.meta)
+        };
+        r.map_err(|e| err(illum::Error::from(e)))
+    }
+
+    /// (width, height).
+    #[getter]
+    fn resolution(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let _ = py;
+        format!(
+            "<illum.Render {}x{}, {} spp{}>",
+            self.width,
+            self.height,
+            self.spp,
+            if self.interrupted {
+                ", interrupted"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+#[pymodule]
+fn _illum(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("IllumError", m.py().get_type::<IllumError>())?;
+    m.add_class::<Scene>()?;
+    m.add_class::<Render>()?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(default_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(devices, m)?)?;
+    m.add_function(wrap_pyfunction!(validation_messages, m)?)?;
+    Ok(())
+}

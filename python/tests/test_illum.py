@@ -1,0 +1,133 @@
+"""The Python module against the command line it shares its library with: the same pixels for the
+same settings, the same error messages, Ctrl-C keeping the samples done, and memory that does not
+grow over a loop of renders. Run by scripts/test.sh (ILLUM_BIN names the CLI binary)."""
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import OpenEXR
+import pytest
+
+import illum
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+BIN = os.environ.get("ILLUM_BIN", str(ROOT / "target" / "release" / "illum"))
+INTERIOR = ROOT / "scenes" / "interior.json"
+
+
+@pytest.fixture(autouse=True)
+def no_validation_messages():
+    """Every test runs with the validation layers on (ILLUM_VALIDATION=1, scripts/test.sh) and
+    fails on any message they give."""
+    yield
+    assert illum.validation_messages() == []
+
+
+def channels(path):
+    """Every channel of an EXR as float32 arrays, by name."""
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        return {name: np.array(c.pixels, dtype=np.float32) for name, c in f.channels().items()}
+
+
+def cli(*args):
+    return subprocess.run([BIN, *map(str, args)], capture_output=True, text=True)
+
+
+def test_a_render_equals_illum_render_bit_for_bit(tmp_path):
+    r = illum.load(INTERIOR).render(spp=4, seed=3, integrator="full", width=40)
+    assert r.beauty.dtype == np.float32 and r.beauty.shape == (30, 40, 3)
+    assert set(r.aovs) == {"Direct", "IndirectDiffuse", "Reflection"}
+    r.write(tmp_path / "py.exr")
+    p = cli("render", INTERIOR, "--spp", 4, "--seed", 3, "--integrator", "full", "--width", 40,
+            "-o", tmp_path / "cli.exr", "--quiet")
+    assert p.returncode == 0, p.stderr
+    a, b = channels(tmp_path / "py.exr"), channels(tmp_path / "cli.exr")
+    assert a.keys() == b.keys()
+    for name in a:
+        assert np.array_equal(a[name], b[name], equal_nan=True), name
+    # The arrays are the written planes.
+    rgb = np.stack([b["R"], b["G"], b["B"]], axis=-1)
+    assert np.array_equal(rgb.reshape(r.beauty.shape), r.beauty)
+    assert r.metadata["illum.integrator"] == "full" and r.metadata["illum.spp"] == "4"
+    assert (r.samples == 4).all() and r.spp == 4 and not r.interrupted
+
+
+def test_a_dict_is_a_scene_file():
+    d = json.loads(INTERIOR.read_text())
+    a = illum.Scene.from_dict(d, base_dir=INTERIOR.parent).render(spp=2, width=16)
+    b = illum.load(INTERIOR).render(spp=2, width=16)
+    assert np.array_equal(a.beauty, b.beauty)
+    assert a.resolution == (16, 12)
+
+
+def test_bad_input_raises_the_message_the_cli_prints(tmp_path):
+    bad = tmp_path / "bad.json"
+    d = json.loads(INTERIOR.read_text())
+    d["materials"]["white"]["diffuse"] = [0.75, -1, 0.72]
+    bad.write_text(json.dumps(d))
+    p = cli("render", bad, "-o", tmp_path / "x.exr")
+    assert p.returncode != 0
+    message = p.stderr.strip().splitlines()[-1].removeprefix("illum: error: ")
+    assert "white" in message and "diffuse" in message
+    with pytest.raises(illum.IllumError) as e:
+        illum.load(bad)
+    assert str(e.value) == message
+    with pytest.raises(illum.IllumError) as e:
+        illum.Scene.from_dict(d)
+    assert "white" in str(e.value) and "diffuse" in str(e.value)
+    with pytest.raises(illum.IllumError, match=r"render\(light_samples='lots'\)"):
+        illum.load(INTERIOR).render(spp=1, width=8, light_samples="lots")
+    with pytest.raises(illum.IllumError, match="takes no parameter"):
+        illum.load(INTERIOR).render(spp=1, width=8, integrator="direct", max_depth=3)
+
+
+def test_ctrl_c_returns_the_samples_done():
+    # SIGINT to the process a second into a long render, as Ctrl-C would send it.
+    script = textwrap.dedent(f"""
+        import json, os, signal, threading
+        import numpy as np
+        import illum
+        s = illum.load({str(INTERIOR)!r})
+        s.render(spp=1, width=32)  # kernels compiled before the clock starts
+        threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        r = s.render(spp=1 << 20, width=32, integrator="path")
+        print(json.dumps({{"spp": r.spp, "interrupted": r.interrupted,
+                          "finite": bool(np.isfinite(r.beauty).all()),
+                          "mean": float(r.beauty.mean()),
+                          "messages": illum.validation_messages()}}))
+    """)
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    got = json.loads(p.stdout.strip().splitlines()[-1])
+    assert got["interrupted"] and 0 < got["spp"] < 1 << 20, got
+    assert got["finite"] and got["mean"] > 0, got
+    assert got["messages"] == []
+
+
+def rss_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def test_a_loop_of_renders_does_not_grow_memory():
+    s = illum.load(INTERIOR)
+    for _ in range(20):
+        s.render(spp=1, width=64, integrator="direct")
+    before = rss_bytes()
+    for _ in range(80):
+        s.render(spp=1, width=64, integrator="direct")
+    grown = rss_bytes() - before
+    # A direct render's film takes 656 bytes a pixel on the host (src/film/memory.rs): 2 MB at
+    # 64x48. Keeping one per render would grow 160 MB over the 80 renders; allow a tenth of that.
+    print(f"resident memory: {before / 1e6:.1f} MB after 20 renders, grew {grown / 1e6:.2f} MB over 80")
+    assert grown < 16e6, f"resident memory grew {grown / 1e6:.1f} MB over 80 renders"
+
+
+def test_devices_lists_the_one_that_renders():
+    names = [d["name"] for d in illum.devices()]
+    r = illum.load(INTERIOR).render(spp=1, width=8)
+    assert r.metadata["illum.device"] in names
