@@ -9,14 +9,26 @@ write it as `illum render` does.
 
 Errors are `illum.IllumError`, with the message the command line prints.
 """
-from ._illum import IllumError, Render, Scene, default_scene, devices, load, validation_messages
+from ._illum import (
+    IllumError,
+    Prepared,
+    Render,
+    Scene,
+    default_scene,
+    devices,
+    load,
+    prepare,
+    validation_messages,
+)
 
 __all__ = [
     "IllumError",
+    "Prepared",
     "Render",
     "Scene",
     "default_scene",
     "devices",
     "load",
+    "prepare",
     "validation_messages",
 ]

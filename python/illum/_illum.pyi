@@ -55,6 +55,35 @@ class Render:
     def write(self, path: str | PathLike[str]) -> None:
         """Writes an EXR (every plane, the header of `illum render`) or, for .png, a PNG."""
 
+class Prepared:
+    """A scene uploaded once (trace structure, kernels): renders again and takes edits, each
+    rewriting only what it changes; its renders equal fresh loads of the edited scene."""
+
+    def set_light(self, name: str, **fields: Any) -> None:
+        """Sets fields of light `name` as the scene format names them (intensity, color, ...)."""
+    def set_material(self, name: str, **fields: Any) -> None:
+        """Sets fields of material `name` (diffuse, specular, emission, ...)."""
+    def set_camera(self, **fields: Any) -> None:
+        """Sets fields of the camera (position, look_at, up, fov_y, resolution)."""
+    def set_transform(self, name: str, transform: Any) -> None:
+        """Sets shape `name`'s transform (the scene format's `transform`)."""
+    @property
+    def scene(self) -> Scene:
+        """The scene as edited so far."""
+    def render(
+        self,
+        spp: int | None = None,
+        time: float | None = None,
+        seed: int = 0,
+        integrator: str | None = None,
+        report: bool = False,
+        **params: Any,
+    ) -> Render:
+        """Renders as Scene.render does, without uploading the scene again."""
+
+def prepare(scene: Scene, trace: str = "auto", device: str | None = None) -> Prepared:
+    """Uploads `scene` once for repeated renders and edits."""
+
 def load(path: str | PathLike[str]) -> Scene:
     """Loads and validates a scene file (JSON or glTF)."""
 

@@ -60,10 +60,120 @@ struct SameThread<T>(T);
 // runs any Python code again, so the wrapped value never crosses threads.
 unsafe impl<T> Send for SameThread<T> {}
 
+impl<T> SameThread<T> {
+    /// The value (a method, so that a closure captures the whole wrapper, not its fields).
+    fn get(self) -> T {
+        self.0
+    }
+}
+
 /// A validated scene (`illum.load`, `Scene.from_dict`).
 #[pyclass(module = "illum", frozen)]
 struct Scene {
     inner: illum::scene::Scene,
+    /// Its JSON, the folder its relative paths start from and its name in messages, when it came
+    /// from JSON: what a prepared scene's edits rewrite.
+    json: Option<Json>,
+}
+
+#[derive(Clone)]
+struct Json {
+    text: String,
+    base: PathBuf,
+    origin: String,
+}
+
+/// The arguments every render takes, as `illum render` reads them.
+struct RenderArgs {
+    spp: Option<u32>,
+    time: Option<f64>,
+    seed: u64,
+    integrator: Option<String>,
+    trace: String,
+    report: bool,
+    /// The integrator's parameters: (name, value as text, origin).
+    params: Vec<(String, String, String)>,
+}
+
+impl RenderArgs {
+    fn params(kw: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String, String)>> {
+        let mut out = Vec::new();
+        if let Some(kw) = kw {
+            for (k, v) in kw.iter() {
+                let k: String = k.extract()?;
+                let text = param_text(&v)?;
+                let origin = format!("render({k}={})", v.repr()?);
+                out.push((k, text, origin));
+            }
+        }
+        Ok(out)
+    }
+
+    /// The render settings for `scene`, and the flag that stops the render.
+    fn settings(&self, scene: &illum::scene::Scene) -> PyResult<(RenderSettings, Arc<AtomicBool>)> {
+        let name = self
+            .integrator
+            .clone()
+            .or_else(|| scene.integrator.name.clone())
+            .unwrap_or_else(|| illum::integrators::default_integrator().name().to_string());
+        let mut p = illum::integrators::scene_params(&name, scene);
+        for (k, v, origin) in &self.params {
+            p.set(k, v, origin);
+        }
+        let integrator =
+            illum::integrators::create(&name, &p).map_err(|e| err(anyhow::anyhow!(e)))?;
+        let trace: TraceMode = self
+            .trace
+            .parse()
+            .map_err(|e: String| err(anyhow::anyhow!("trace={:?}: {e}", self.trace)))?;
+        let cancel = Arc::new(AtomicBool::new(false));
+        let settings = RenderSettings {
+            integrator,
+            // As `illum render`: 16 spp, or without a cap under a time budget.
+            spp: self
+                .spp
+                .unwrap_or(if self.time.is_some() { 1 << 20 } else { 16 }),
+            time: self.time,
+            seed: self.seed,
+            trace,
+            evaluate_passes: self.report,
+            cancel: Some(cancel.clone()),
+            ..Default::default()
+        };
+        Ok((settings, cancel))
+    }
+}
+
+/// Runs `render` with the GIL released, Ctrl-C setting `cancel`, and makes its result.
+fn run(
+    py: Python<'_>,
+    ctx: Context,
+    settings: RenderSettings,
+    cancel: Arc<AtomicBool>,
+    render: impl FnOnce(
+        &Renderer,
+        &RenderSettings,
+        &mut dyn FnMut(u32, u32),
+    ) -> illum::Result<RenderOutput>,
+) -> PyResult<Render> {
+    let job = SameThread((ctx, settings, render));
+    let (out, device_name, settings, stopped) = py
+        .detach(move || {
+            let (ctx, settings, render) = job.get();
+            let mut stopped = false;
+            let r = render(&Renderer::new(ctx.clone()), &settings, &mut |_, _| {
+                // Python's SIGINT handler runs here; KeyboardInterrupt stops the render.
+                if !stopped && Python::attach(|py| py.check_signals()).is_err() {
+                    stopped = true;
+                    cancel.store(true, Ordering::SeqCst);
+                }
+            });
+            SameThread((r, ctx.info().name.clone(), settings, stopped))
+        })
+        .0;
+    let out = out.map_err(err)?;
+    let meta = illum::cli::image_metadata(&out, &settings, &device_name);
+    Render::new(py, out, meta, stopped)
 }
 
 /// The value of a keyword parameter as the integrator reads it: booleans as on/off.
@@ -90,8 +200,15 @@ impl Scene {
             Some(b) => b,
             None => std::env::current_dir().map_err(err)?,
         };
-        let inner = illum::scene::from_json_str(&text, "the scene dict", &base).map_err(err)?;
-        Ok(Scene { inner })
+        let inner = illum::scene::from_json_str(&text, DICT, &base).map_err(err)?;
+        Ok(Scene {
+            inner,
+            json: Some(Json {
+                text,
+                base,
+                origin: DICT.into(),
+            }),
+        })
     }
 
     /// The camera's resolution, (width, height).
@@ -127,53 +244,20 @@ impl Scene {
             .camera
             .set_resolution(width, height)
             .map_err(|e| err(anyhow::anyhow!(e)))?;
-        let name = integrator
-            .or_else(|| scene.integrator.name.clone())
-            .unwrap_or_else(|| illum::integrators::default_integrator().name().to_string());
-        let mut p = illum::integrators::scene_params(&name, &scene);
-        if let Some(kw) = params {
-            for (k, v) in kw.iter() {
-                let k: String = k.extract()?;
-                let text = param_text(&v)?;
-                p.set(&k, &text, format!("render({k}={})", v.repr()?));
-            }
-        }
-        let integrator =
-            illum::integrators::create(&name, &p).map_err(|e| err(anyhow::anyhow!(e)))?;
-        let trace: TraceMode = trace
-            .parse()
-            .map_err(|e: String| err(anyhow::anyhow!("trace={trace:?}: {e}")))?;
-        let cancel = Arc::new(AtomicBool::new(false));
-        let settings = RenderSettings {
-            integrator,
-            // As `illum render`: 16 spp, or without a cap under a time budget.
-            spp: spp.unwrap_or(if time.is_some() { 1 << 20 } else { 16 }),
+        let args = RenderArgs {
+            spp,
             time,
             seed,
-            trace,
-            evaluate_passes: report,
-            cancel: Some(cancel.clone()),
-            ..Default::default()
+            integrator,
+            trace: trace.to_string(),
+            report,
+            params: RenderArgs::params(params)?,
         };
+        let (settings, cancel) = args.settings(&scene)?;
         let ctx = context(&device).map_err(err)?;
-        let job = SameThread((ctx, scene, settings));
-        let (out, device_name, settings, stopped) = py
-            .detach(move || {
-                let SameThread((ctx, scene, settings)) = job;
-                let mut stopped = false;
-                let r = Renderer::new(ctx.clone()).render(&scene, &settings, &mut |_, _| {
-                    // Python's SIGINT handler runs here; KeyboardInterrupt stops the render.
-                    if !stopped && Python::attach(|py| py.check_signals()).is_err() {
-                        stopped = true;
-                        cancel.store(true, Ordering::SeqCst);
-                    }
-                });
-                SameThread((r, ctx.info().name.clone(), settings, stopped))
-            })
-            .0;
-        let out = out.map_err(err)?;
-        let meta = illum::cli::image_metadata(&out, &settings, &device_name);
-        Render::new(py, out, meta, stopped)
+        run(py, ctx, settings, cancel, move |r, s, progress| {
+            r.render(&scene, s, progress)
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -182,11 +266,24 @@ impl Scene {
     }
 }
 
+/// The origin a scene from a dict has in messages.
+const DICT: &str = "the scene dict";
+
 /// Loads and validates a scene file (JSON or glTF), as `illum render FILE` does.
 #[pyfunction]
 fn load(path: PathBuf) -> PyResult<Scene> {
     let inner = illum::scene::load(&path).map_err(err)?;
-    Ok(Scene { inner })
+    let json = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        .then(|| std::fs::read_to_string(&path).ok())
+        .flatten()
+        .map(|text| Json {
+            text,
+            base: path.parent().map(PathBuf::from).unwrap_or_default(),
+            origin: path.display().to_string(),
+        });
+    Ok(Scene { inner, json })
 }
 
 /// The built-in default scene (what `illum render` renders without a scene file).
@@ -194,6 +291,233 @@ fn load(path: PathBuf) -> PyResult<Scene> {
 fn default_scene() -> Scene {
     Scene {
         inner: illum::scene::default_scene(),
+        json: None,
+    }
+}
+
+/// A scene uploaded once, with its trace structure and kernels (`illum.prepare`): renders again
+/// without uploading, and edits (lights, materials, the camera, instance transforms) rewrite only
+/// what they change (`PreparedScene::update`), giving the pixels a fresh load of the edited scene
+/// gives.
+#[pyclass(module = "illum", unsendable)]
+struct Prepared {
+    ctx: Context,
+    prepared: illum::render::PreparedScene,
+    scene: illum::scene::Scene,
+    json: Option<(serde_json::Value, Json)>,
+}
+
+/// Prepares `scene` for repeated renders and edits.
+#[pyfunction]
+#[pyo3(signature = (scene, trace="auto", device=None))]
+fn prepare(
+    py: Python<'_>,
+    scene: &Scene,
+    trace: &str,
+    device: Option<String>,
+) -> PyResult<Prepared> {
+    let trace: TraceMode = trace
+        .parse()
+        .map_err(|e: String| err(anyhow::anyhow!("trace={trace:?}: {e}")))?;
+    let json = match &scene.json {
+        Some(j) => Some((
+            serde_json::from_str(&j.text).map_err(|e| err(anyhow::anyhow!("{}: {e}", j.origin)))?,
+            j.clone(),
+        )),
+        None => None,
+    };
+    let ctx = context(&device).map_err(err)?;
+    let job = SameThread((ctx.clone(), &scene.inner));
+    let prepared = py
+        .detach(move || {
+            let (ctx, s) = job.get();
+            SameThread(Renderer::new(ctx).prepare(s, trace))
+        })
+        .0
+        .map_err(err)?;
+    Ok(Prepared {
+        ctx,
+        prepared,
+        scene: scene.inner.clone(),
+        json,
+    })
+}
+
+impl Prepared {
+    /// Sets `fields` of the JSON object `section` (or its member `name`), validates the edited
+    /// scene as a load would and brings the prepared scene to it; on any error nothing changes.
+    fn edit(
+        &mut self,
+        py: Python<'_>,
+        what: &str,
+        section: &str,
+        name: Option<&str>,
+        fields: &[(String, Bound<'_, PyAny>)],
+    ) -> PyResult<()> {
+        let Some((value, j)) = &self.json else {
+            return Err(IllumError::new_err(format!(
+                "{what}: edits need a scene loaded from JSON or made by Scene.from_dict"
+            )));
+        };
+        let mut value = value.clone();
+        let obj = match name {
+            Some(n) => {
+                let names: Vec<String> = value[section]
+                    .as_object()
+                    .map(|o| o.keys().cloned().collect())
+                    .unwrap_or_default();
+                value[section]
+                    .get_mut(n)
+                    .and_then(|v| v.as_object_mut())
+                    .ok_or_else(|| {
+                        IllumError::new_err(format!(
+                            "{what}: {}: no {section}.{n} (it has: {})",
+                            j.origin,
+                            names.join(", ")
+                        ))
+                    })?
+            }
+            None => value
+                .get_mut(section)
+                .and_then(|v| v.as_object_mut())
+                .ok_or_else(|| {
+                    IllumError::new_err(format!("{what}: {}: no {section}", j.origin))
+                })?,
+        };
+        let dumps = py.import("json")?.getattr("dumps")?;
+        for (k, v) in fields {
+            let text: String = dumps.call1((v,))?.extract()?;
+            let v: serde_json::Value = serde_json::from_str(&text)
+                .map_err(|e| err(anyhow::anyhow!("{what}({k}=...): {e}")))?;
+            obj.insert(k.clone(), v);
+        }
+        let text = value.to_string();
+        let scene = illum::scene::from_json_str(&text, &j.origin, &j.base).map_err(err)?;
+        self.prepared.update(&self.ctx, &scene).map_err(err)?;
+        let j = Json { text, ..j.clone() };
+        self.scene = scene;
+        self.json = Some((value, j));
+        Ok(())
+    }
+}
+
+fn fields<'py>(kw: Option<&Bound<'py, PyDict>>) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {
+    let mut out = Vec::new();
+    if let Some(kw) = kw {
+        for (k, v) in kw.iter() {
+            out.push((k.extract()?, v));
+        }
+    }
+    Ok(out)
+}
+
+#[pymethods]
+impl Prepared {
+    /// Sets fields of light `name` as the scene format names them (e.g. intensity=4,
+    /// color=[1, 0.9, 0.8]): its table is rewritten, nothing else.
+    #[pyo3(signature = (name, **fields))]
+    fn set_light(
+        &mut self,
+        py: Python<'_>,
+        name: &str,
+        fields: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        let f = self::fields(fields)?;
+        self.edit(py, "set_light", "lights", Some(name), &f)
+    }
+
+    /// Sets fields of material `name` (e.g. diffuse=[0.5, 0.5, 0.5]).
+    #[pyo3(signature = (name, **fields))]
+    fn set_material(
+        &mut self,
+        py: Python<'_>,
+        name: &str,
+        fields: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        let f = self::fields(fields)?;
+        self.edit(py, "set_material", "materials", Some(name), &f)
+    }
+
+    /// Sets fields of the camera (position, look_at, up, fov_y, resolution): nothing is uploaded.
+    #[pyo3(signature = (**fields))]
+    fn set_camera(&mut self, py: Python<'_>, fields: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let f = self::fields(fields)?;
+        self.edit(py, "set_camera", "camera", None, &f)
+    }
+
+    /// Sets the transform of shape `name` (as the scene format's `transform`): the trace
+    /// structure's top level is rebuilt, no mesh is uploaded again.
+    fn set_transform(
+        &mut self,
+        py: Python<'_>,
+        name: &str,
+        transform: Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        self.edit(
+            py,
+            "set_transform",
+            "shapes",
+            Some(name),
+            &[("transform".to_string(), transform)],
+        )
+    }
+
+    /// The scene as edited so far.
+    #[getter]
+    fn scene(&self) -> Scene {
+        Scene {
+            inner: self.scene.clone(),
+            json: self.json.as_ref().map(|(_, j)| j.clone()),
+        }
+    }
+
+    /// Renders as `Scene.render` does (the trace path and device are the prepared scene's),
+    /// without uploading the scene again.
+    #[pyo3(signature = (spp=None, time=None, seed=0, integrator=None, report=false, **params))]
+    #[allow(clippy::too_many_arguments)]
+    fn render(
+        &self,
+        py: Python<'_>,
+        spp: Option<u32>,
+        time: Option<f64>,
+        seed: u64,
+        integrator: Option<String>,
+        report: bool,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Render> {
+        let args = RenderArgs {
+            spp,
+            time,
+            seed,
+            integrator,
+            trace: "auto".into(),
+            report,
+            params: RenderArgs::params(params)?,
+        };
+        let (mut settings, cancel) = args.settings(&self.scene)?;
+        settings.trace = TraceMode::Auto;
+        let job = SameThread((&self.prepared, &self.scene.camera));
+        run(
+            py,
+            self.ctx.clone(),
+            settings,
+            cancel,
+            move |r, s, progress| {
+                let (prepared, camera) = job.get();
+                let mut outs = r.render_prepared(prepared, camera, s, &[s.seed], progress)?;
+                Ok(outs.pop().expect("one render per seed"))
+            },
+        )
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.scene.camera;
+        format!(
+            "<illum.Prepared {}x{}, {}>",
+            c.width,
+            c.height,
+            self.prepared.trace_name()
+        )
     }
 }
 
@@ -448,6 +772,8 @@ fn _illum(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("IllumError", m.py().get_type::<IllumError>())?;
     m.add_class::<Scene>()?;
     m.add_class::<Render>()?;
+    m.add_class::<Prepared>()?;
+    m.add_function(wrap_pyfunction!(prepare, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(default_scene, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
