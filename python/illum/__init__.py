@@ -17,6 +17,7 @@ from ._illum import (
     default_scene,
     devices,
     load,
+    merge,
     prepare,
     validation_messages,
 )
@@ -29,6 +30,7 @@ __all__ = [
     "default_scene",
     "devices",
     "load",
+    "merge",
     "prepare",
     "validation_messages",
 ]

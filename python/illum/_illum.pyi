@@ -28,9 +28,14 @@ class Scene:
         trace: str = "auto",
         device: str | None = None,
         report: bool = False,
+        samples: tuple[int, int] | None = None,
+        crop: tuple[int, int, int, int] | None = None,
         **params: Any,
     ) -> Render:
         """Renders as `illum render` does with the same settings (the same pixels bit for bit).
+
+        `samples=(a, b)` and `crop=(x0, y0, x1, y1)` render one job of a split render (its
+        `write` writes the partial EXR; `merge` joins the jobs).
 
         `params` are the integrator's parameters (`--param NAME=VALUE`; booleans for on/off).
         Ctrl-C stops the render and returns the samples done (`Render.interrupted`)."""
@@ -52,6 +57,9 @@ class Render:
     interrupted: bool
     @property
     def resolution(self) -> tuple[int, int]: ...
+    @property
+    def job(self) -> tuple[tuple[int, int], tuple[int, int, int, int], tuple[int, int]] | None:
+        """A job's samples (a, b), window (x0, y0, x1, y1) and frame (width, height), else None."""
     def write(self, path: str | PathLike[str]) -> None:
         """Writes an EXR (every plane, the header of `illum render`) or, for .png, a PNG."""
 
@@ -83,6 +91,9 @@ class Prepared:
 
 def prepare(scene: Scene, trace: str = "auto", device: str | None = None) -> Prepared:
     """Uploads `scene` once for repeated renders and edits."""
+
+def merge(parts: list[Render] | list[str | PathLike[str]]) -> Render:
+    """Joins the jobs of a split render (results or partial EXRs) into the whole image, bit for bit."""
 
 def load(path: str | PathLike[str]) -> Scene:
     """Loads and validates a scene file (JSON or glTF)."""

@@ -4,7 +4,8 @@
 //! Errors are `illum.IllumError` with the message the CLI prints; rendering releases the GIL,
 //! and Ctrl-C stops a render, which then returns the samples it has (as the CLI writes them).
 
-use illum::film::{AovPlane, Film};
+use illum::film::{AovPlane, Film, FilmSums, Window};
+use illum::jobs::partial::PartInfo;
 use illum::output::ImageMetadata;
 use illum::render::{RenderOutput, RenderSettings, Renderer};
 use illum::trace::TraceMode;
@@ -176,6 +177,47 @@ fn run(
     Render::new(py, out, meta, stopped)
 }
 
+/// Joins the jobs of a split render (their `Render` results, or the partial EXRs they wrote)
+/// into the image a render in one piece gives, bit for bit, as `illum merge` does.
+#[pyfunction]
+fn merge(py: Python<'_>, parts: &Bound<'_, PyList>) -> PyResult<Render> {
+    let mut paths = Vec::new();
+    let mut jobs = Vec::new();
+    for (k, p) in parts.iter().enumerate() {
+        if let Ok(r) = p.cast::<Render>() {
+            let (info, sums) = r.get().part.clone().ok_or_else(|| {
+                IllumError::new_err(format!(
+                    "merge: part {k} is not a job of a split render (render it with samples= or crop=)"
+                ))
+            })?;
+            jobs.push(illum::jobs::Part {
+                path: PathBuf::from(format!("part {k}")),
+                info,
+                sums,
+            });
+        } else {
+            paths.push(p.extract::<PathBuf>()?);
+        }
+    }
+    if !jobs.is_empty() && !paths.is_empty() {
+        return Err(IllumError::new_err(
+            "merge: give the jobs' results or their files, not both",
+        ));
+    }
+    let n = jobs.len().max(paths.len());
+    let m = py
+        .detach(move || {
+            if paths.is_empty() {
+                illum::jobs::merge(&jobs)
+            } else {
+                illum::jobs::merge_files(&paths)
+            }
+        })
+        .map_err(err)?;
+    let meta = illum::cli::merge::merged_metadata(&m, n);
+    Render::from_film(py, m.film, meta, m.spp, false, &[])
+}
+
 /// The value of a keyword parameter as the integrator reads it: booleans as on/off.
 fn param_text(v: &Bound<'_, PyAny>) -> PyResult<String> {
     if let Ok(b) = v.extract::<bool>() {
@@ -220,10 +262,12 @@ impl Scene {
     /// Renders the scene, as `illum render` does with the same settings (the same pixels bit
     /// for bit). `integrator` and `**params` as `--integrator` and `--param NAME=VALUE` (booleans
     /// for on/off); `width`/`height` as `--width`/`--height`; `report=True` evaluates every pass
-    /// (the error-against-time arrays). Ctrl-C stops the render: the result then holds the
-    /// samples done (`interrupted` is True).
+    /// (the error-against-time arrays). `samples=(a, b)` and `crop=(x0, y0, x1, y1)` render one
+    /// job of a split render, as `--samples A..B` and `--crop X0,Y0,X1,Y1` do: its `write` writes
+    /// the partial EXR and `illum.merge` joins the jobs. Ctrl-C stops the render: the result then
+    /// holds the samples done (`interrupted` is True).
     #[pyo3(signature = (spp=None, time=None, seed=0, integrator=None, width=None, height=None,
-                        trace="auto", device=None, report=false, **params))]
+                        trace="auto", device=None, report=false, samples=None, crop=None, **params))]
     #[allow(clippy::too_many_arguments)]
     fn render(
         &self,
@@ -237,6 +281,8 @@ impl Scene {
         trace: &str,
         device: Option<String>,
         report: bool,
+        samples: Option<(u32, u32)>,
+        crop: Option<(u32, u32, u32, u32)>,
         params: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Render> {
         let mut scene = self.inner.clone();
@@ -253,11 +299,23 @@ impl Scene {
             report,
             params: RenderArgs::params(params)?,
         };
-        let (settings, cancel) = args.settings(&scene)?;
+        let (mut settings, cancel) = args.settings(&scene)?;
+        settings.samples = samples;
+        settings.crop = crop.map(|(x0, y0, x1, y1)| Window { x0, y0, x1, y1 });
+        let job = settings.samples.is_some() || settings.crop.is_some();
         let ctx = context(&device).map_err(err)?;
-        run(py, ctx, settings, cancel, move |r, s, progress| {
+        let mut r = run(py, ctx, settings.clone(), cancel, |r, s, progress| {
             r.render(&scene, s, progress)
-        })
+        })?;
+        if let Some(out) = r.job.take()
+            && job
+            && !r.interrupted
+        {
+            let info =
+                illum::jobs::part_info(&scene, &settings, &out, &r.meta.device).map_err(err)?;
+            r.part = Some((info, out.job.sums));
+        }
+        Ok(r)
     }
 
     fn __repr__(&self) -> String {
@@ -497,7 +555,7 @@ impl Prepared {
         let (mut settings, cancel) = args.settings(&self.scene)?;
         settings.trace = TraceMode::Auto;
         let job = SameThread((&self.prepared, &self.scene.camera));
-        run(
+        let mut r = run(
             py,
             self.ctx.clone(),
             settings,
@@ -507,7 +565,9 @@ impl Prepared {
                 let mut outs = r.render_prepared(prepared, camera, s, &[s.seed], progress)?;
                 Ok(outs.pop().expect("one render per seed"))
             },
-        )
+        )?;
+        r.job = None;
+        Ok(r)
     }
 
     fn __repr__(&self) -> String {
@@ -563,6 +623,9 @@ fn flat(v: Vec<[f32; 3]>) -> Vec<f32> {
     unsafe { Vec::from_raw_parts(ptr.cast::<f32>(), len * 3, cap * 3) }
 }
 
+/// A job's samples (a, b), window (x0, y0, x1, y1) and frame (width, height).
+type JobShape = ((u32, u32), (u32, u32, u32, u32), (u32, u32));
+
 /// A render's result: NumPy float32 arrays (height, width[, 3]) holding the film's planes, the
 /// metadata of its EXR header and its error-against-time report.
 #[pyclass(module = "illum", frozen)]
@@ -604,23 +667,36 @@ struct Render {
     height: u32,
     /// The EXR header, for `write`.
     meta: ImageMetadata,
-    /// Whether the film had a variance plane and per-pixel counts.
+    /// Whether the film had per-pixel counts.
     has_counts: bool,
+    /// A job of a split render: what its partial EXR holds.
+    part: Option<(PartInfo, FilmSums)>,
+    /// The render's output (its film moved into the arrays), until a job's part is made.
+    job: Option<RenderOutput>,
 }
 
 impl Render {
     fn new(
         py: Python<'_>,
-        out: RenderOutput,
+        mut out: RenderOutput,
         meta: ImageMetadata,
         stopped: bool,
     ) -> PyResult<Render> {
-        let RenderOutput {
-            film,
-            stats,
-            passes,
-            ..
-        } = out;
+        let film = std::mem::replace(&mut out.film, Film::new(0, 0));
+        let interrupted = stopped || out.stats.interrupted;
+        let mut r = Render::from_film(py, film, meta, out.stats.spp, interrupted, &out.passes)?;
+        r.job = Some(out);
+        Ok(r)
+    }
+
+    fn from_film(
+        py: Python<'_>,
+        film: Film,
+        meta: ImageMetadata,
+        spp: u32,
+        interrupted: bool,
+        passes: &[illum::render::PassReport],
+    ) -> PyResult<Render> {
         let (w, h) = (film.width as usize, film.height as usize);
         let rgb = |v: Vec<[f32; 3]>| -> PyResult<Py<PyAny>> {
             Ok(PyArray1::from_vec(py, flat(v))
@@ -635,9 +711,7 @@ impl Render {
                 .unbind())
         };
         let has_counts = film.samples.is_some();
-        let counts = film
-            .samples
-            .unwrap_or_else(|| vec![stats.spp as f32; w * h]);
+        let counts = film.samples.unwrap_or_else(|| vec![spp as f32; w * h]);
         let aovs = PyDict::new(py);
         for AovPlane { name, rgb: plane } in film.aovs {
             aovs.set_item(name, rgb(plane)?)?;
@@ -678,12 +752,14 @@ impl Render {
             aovs: aovs.unbind(),
             metadata: md.unbind(),
             report: rep.unbind(),
-            spp: stats.spp,
-            interrupted: stopped || stats.interrupted,
+            spp,
+            interrupted,
             width: film.width,
             height: film.height,
             meta,
             has_counts,
+            part: None,
+            job: None,
         })
     }
 
@@ -731,8 +807,22 @@ impl Render {
 #[pymethods]
 impl Render {
     /// Writes the image as `illum render -o PATH` does: an EXR (every plane, the same header),
-    /// or a PNG (tone-mapped beauty) for a .png path; written to a temporary file and renamed.
+    /// or a PNG (tone-mapped beauty) for a .png path; written to a temporary file and renamed. A
+    /// job of a split render writes its partial EXR (the exact sums `illum merge` takes).
     fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        if let Some((info, sums)) = &self.part {
+            if !path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+            {
+                return Err(IllumError::new_err(format!(
+                    "{}: a job of a split render writes a partial EXR: name a .exr file",
+                    path.display()
+                )));
+            }
+            return illum::jobs::partial::write_partial(&path, info, sums)
+                .map_err(|e| err(illum::Error::from(e)));
+        }
         let film = self.film(py)?;
         let png = path
             .extension()
@@ -749,6 +839,16 @@ impl Render {
     #[getter]
     fn resolution(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+
+    /// For a job of a split render: its samples (a, b), window (x0, y0, x1, y1) and the frame's
+    /// (width, height); else None.
+    #[getter]
+    fn job(&self) -> Option<JobShape> {
+        self.part.as_ref().map(|(i, _)| {
+            let w = i.window;
+            (i.samples, (w.x0, w.y0, w.x1, w.y1), i.frame)
+        })
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
@@ -774,6 +874,7 @@ fn _illum(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Render>()?;
     m.add_class::<Prepared>()?;
     m.add_function(wrap_pyfunction!(prepare, m)?)?;
+    m.add_function(wrap_pyfunction!(merge, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(default_scene, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;

@@ -140,6 +140,33 @@ def test_a_prepared_scene_edit_equals_a_fresh_load_of_the_edited_scene():
     assert not np.array_equal(a.beauty, p.render(spp=2, seed=2, integrator="direct").beauty)
 
 
+def test_a_split_render_merges_into_the_render_in_one_piece(tmp_path):
+    s = illum.load(INTERIOR)
+    whole = s.render(spp=8, seed=2, width=32)
+    parts = [s.render(spp=8, seed=2, width=32, samples=r, crop=c)
+             for r in [(0, 3), (3, 8)] for c in [(0, 0, 32, 10), (0, 10, 32, 24)]]
+    assert parts[0].job == ((0, 3), (0, 0, 32, 10), (32, 24)) and whole.job is None
+    merged = illum.merge(parts)
+    assert np.array_equal(merged.beauty, whole.beauty)
+    for name in whole.aovs:
+        assert np.array_equal(merged.aovs[name], whole.aovs[name]), name
+    # Through the jobs' files, as a farm does, and against `illum merge` of the same files.
+    paths = [tmp_path / f"part{k}.exr" for k in range(len(parts))]
+    for part, path in zip(parts, paths):
+        part.write(path)
+    from_files = illum.merge([str(p) for p in paths])
+    assert np.array_equal(from_files.beauty, whole.beauty)
+    from_files.write(tmp_path / "py.exr")
+    p = cli("merge", *paths, "-o", tmp_path / "cli.exr", "--quiet")
+    assert p.returncode == 0, p.stderr
+    a, b = channels(tmp_path / "py.exr"), channels(tmp_path / "cli.exr")
+    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    with pytest.raises(illum.IllumError, match="not a job"):
+        illum.merge([whole])
+    with pytest.raises(illum.IllumError):
+        illum.merge(parts[:3])
+
+
 def rss_bytes():
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")

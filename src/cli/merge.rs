@@ -2,7 +2,7 @@
 //! into the image a render in one piece writes, bit for bit (src/jobs/mod.rs).
 
 use super::check_outputs;
-use crate::jobs::merge_files;
+use crate::jobs::{Merged, merge_files};
 use crate::output::{ImageMetadata, write_exr, write_png};
 use anyhow::Result;
 use std::path::PathBuf;
@@ -24,6 +24,30 @@ pub struct MergeArgs {
     pub quiet: bool,
 }
 
+/// The EXR header of a merged image: what `illum merge` writes (and Python's `illum.merge`).
+pub fn merged_metadata(m: &Merged, parts: usize) -> ImageMetadata {
+    let mut extra = vec![
+        ("illum.trace".to_string(), m.trace.clone()),
+        ("illum.settings".into(), m.settings.clone()),
+        (
+            "illum.nonFiniteSamples".into(),
+            m.non_finite_samples.to_string(),
+        ),
+        ("illum.mergedParts".into(), parts.to_string()),
+    ];
+    if m.clamped_samples > 0 {
+        extra.push(("illum.clampedSamples".into(), m.clamped_samples.to_string()));
+    }
+    ImageMetadata {
+        spp: m.spp,
+        render_seconds: m.render_seconds,
+        setup_seconds: m.setup_seconds,
+        device: m.devices.join(", "),
+        seed: m.seed,
+        extra,
+    }
+}
+
 pub fn run(a: &MergeArgs) -> Result<()> {
     let (exr_path, png_path) = super::image_paths(&a.output, a.png)?;
     let outputs = super::named([
@@ -36,26 +60,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
     let start = Instant::now();
     // Headers first (a mismatch fails before any data is read), then one part at a time.
     let m = merge_files(&a.parts)?;
-    let mut extra = vec![
-        ("illum.trace".to_string(), m.trace.clone()),
-        ("illum.settings".into(), m.settings.clone()),
-        (
-            "illum.nonFiniteSamples".into(),
-            m.non_finite_samples.to_string(),
-        ),
-        ("illum.mergedParts".into(), a.parts.len().to_string()),
-    ];
-    if m.clamped_samples > 0 {
-        extra.push(("illum.clampedSamples".into(), m.clamped_samples.to_string()));
-    }
-    let meta = ImageMetadata {
-        spp: m.spp,
-        render_seconds: m.render_seconds,
-        setup_seconds: m.setup_seconds,
-        device: m.devices.join(", "),
-        seed: m.seed,
-        extra,
-    };
+    let meta = merged_metadata(&m, a.parts.len());
     write_exr(&exr_path, &m.film, &meta)?;
     if let Some(p) = &png_path {
         write_png(p, &m.film)?;
