@@ -465,3 +465,31 @@ fn integrators_refuse_parameters_and_names_they_do_not_take() {
         &["integrator.max_depth", "a number, a boolean or a string"],
     );
 }
+
+/// A closed stderr (`illum render … 2>&1 | head -1` once head has quit) costs the render
+/// nothing: the image is written and the exit code is 0 (`eprintln!` would panic at the first
+/// line, before or after the write).
+#[test]
+fn a_closed_stderr_does_not_stop_a_render() {
+    use std::process::Stdio;
+    let out = common::temp_path("closed-stderr.exr");
+    let _ = std::fs::remove_file(&out);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_illum"))
+        .args([
+            "render",
+            "--width",
+            "32",
+            "--spp",
+            "4",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .env("ILLUM_VALIDATION", "1")
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("running illum");
+    drop(child.stderr.take()); // the reader is gone: every write to stderr fails (EPIPE)
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(0));
+    assert!(out.exists(), "the image was not written");
+}

@@ -193,7 +193,7 @@ fn trace(a: &BenchTraceArgs) -> Result<()> {
         validation: a.validate,
     })?;
     if paths.contains(&TraceMode::RayQuery) && !ctx.ray_query() {
-        eprintln!(
+        crate::note!(
             "illum: {} has no VK_KHR_ray_query: measuring the compute BVH only",
             ctx.info().name
         );

@@ -298,7 +298,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     )?;
     write_strip(&files.strip, &rows, reference.as_deref())?;
     if !a.quiet {
-        eprintln!(
+        crate::note!(
             "illum compare: wrote {}, {} and {}-<name>.exr",
             files.plot.display(),
             files.strip.display(),
@@ -317,7 +317,7 @@ fn render_run(
     name: &str,
 ) -> Result<RenderOutput> {
     if !a.quiet {
-        eprintln!("illum compare: {name} for {} s ...", a.time);
+        crate::note!("illum compare: {name} for {} s ...", a.time);
     }
     let ctx = renderer.context();
     let bar = progress_bar(a.quiet, settings.spp, Some(a.time));

@@ -66,7 +66,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
         write_png(p, &m.film)?;
     }
     if !a.quiet {
-        eprintln!(
+        crate::note!(
             "illum: merged {} parts into {}x{} at {} spp in {:.2} s; the parts rendered for {:.2} s after {:.2} s of set-up; wrote {}",
             a.parts.len(),
             m.film.width,

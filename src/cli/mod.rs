@@ -59,11 +59,11 @@ pub fn run(command: Command) -> i32 {
         Ok(()) => 0,
         Err(e) => match e.downcast_ref::<Interrupted>() {
             Some(i) => {
-                eprintln!("illum: {i}");
+                crate::note!("illum: {i}");
                 if i.wrote { 128 + i.signal } else { 1 }
             }
             None => {
-                eprintln!("illum: error: {e:#}");
+                crate::note!("illum: error: {e:#}");
                 1
             }
         },

@@ -229,13 +229,13 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let out = out?;
     let s = &out.stats;
     if !s.dark_lights.is_empty() {
-        eprintln!(
+        crate::note!(
             "illum: note: left out lights that emit nothing (zero radiance or size): {}",
             s.dark_lights.join(", ")
         );
     }
     if s.emitters == 0 {
-        eprintln!(
+        crate::note!(
             "illum: warning: the scene emits no light (no light with radiance and size, no emissive \
              geometry): the image is black apart from the dome or emission seen directly"
         );
@@ -328,7 +328,7 @@ pub(super) fn announce_compiles(ctx: &Context, bar: &ProgressBar, quiet: bool) -
             }
             if !d.load(Ordering::SeqCst) {
                 b.suspend(|| {
-                    eprintln!(
+                    crate::note!(
                         "illum: compiling kernels for this scene's features… (the first time a \
                          feature combination is seen this takes up to half a minute on a CPU \
                          driver; later renders reuse the driver's cache)"
@@ -392,7 +392,7 @@ fn summary(
     } else {
         format!("{:.1} (adaptive, at most {})", samples / pixels, s.spp)
     };
-    eprintln!(
+    crate::note!(
         "illum: {}x{} at {} spp in {:.2} s on {} via {}: upload {:.3} s, structure build {:.3} s \
          ({} triangles; BLAS {:.1} MiB after compaction from {:.1}, TLAS {:.2} MiB), render {:.2} s \
          ({:.2} M camera samples/s, {:.2} M rays/s, {:.2} rays per sample); {} non-finite samples; wrote {}",
@@ -416,7 +416,7 @@ fn summary(
         written,
     );
     for (name, value) in &s.integrator {
-        eprintln!("illum: {name}: {value}");
+        crate::note!("illum: {name}: {value}");
     }
     let mut line = format!(
         "illum: {} spp, {:.3} s rendering ({:.3} s on the device)",
@@ -440,7 +440,7 @@ fn summary(
             s.clamped_samples
         );
     }
-    eprintln!("{line}");
+    crate::note!("{line}");
 }
 
 /// One job of a split render: samples A..B and/or a pixel window, or part K of N, written as a
@@ -526,7 +526,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
                 crop.unwrap_or(Window::full(scene.camera.width, scene.camera.height)),
             );
             bar.suspend(|| {
-                eprintln!(
+                crate::note!(
                     "illum: {label}samples {}..{} of {spp}, pixels {w}: set-up done in {:.2} s, rendering",
                     s.0,
                     s.1,
@@ -557,7 +557,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
     crate::jobs::partial::write_partial(&a.output, &info, &out.job.sums)?;
     super::check_validation(&ctx)?;
     if !a.quiet {
-        eprintln!(
+        crate::note!(
             "illum: job {label}samples {}..{} of {spp}, pixels {} of {}x{}: {:.2} s rendering, {:.2} s set-up; wrote {}",
             info.samples.0,
             info.samples.1,

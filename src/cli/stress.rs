@@ -73,7 +73,7 @@ pub fn run(a: &StressArgs) -> Result<()> {
         }
     }
     if a.scenes.is_none() && scenes != Path::new("scenes/stress") {
-        eprintln!("illum stress: scenes from {}", scenes.display());
+        crate::note!("illum stress: scenes from {}", scenes.display());
     }
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
@@ -87,9 +87,15 @@ pub fn run(a: &StressArgs) -> Result<()> {
         reference_spp: a.reference_spp,
     };
     let rows = crate::stress::run(&renderer, &scenes, &o, &mut |r| {
-        eprintln!(
+        crate::note!(
             "illum stress: {:<24} {:<9} {:>7} spp  relMSE {:.2e}  non-finite {}  mean ratio {:.5} (z {:+.1})",
-            r.case, r.trace, r.spp, r.relmse, r.non_finite_samples, r.mean_ratio, r.z
+            r.case,
+            r.trace,
+            r.spp,
+            r.relmse,
+            r.non_finite_samples,
+            r.mean_ratio,
+            r.z
         )
     })?;
     let command = format!(
@@ -104,6 +110,6 @@ pub fn run(a: &StressArgs) -> Result<()> {
         })
     })
     .with_context(|| format!("writing the report {}", a.output.display()))?;
-    eprintln!("illum stress: wrote {}", a.output.display());
+    crate::note!("illum stress: wrote {}", a.output.display());
     Ok(())
 }

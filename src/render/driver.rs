@@ -156,7 +156,7 @@ impl Setup {
         })?;
         let seconds = warm.elapsed().as_secs_f64();
         if crate::vk::kernel_times() {
-            eprintln!(
+            crate::note!(
                 "illum: warm-up dispatch of {}: {seconds:.3} s ({:.3} s of process CPU)",
                 self.integrator.name(),
                 crate::vk::process_cpu_seconds() - warm_cpu

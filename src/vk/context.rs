@@ -93,7 +93,7 @@ unsafe extern "system" fn debug_callback(
                 .to_string_lossy()
                 .into_owned()
         };
-        eprintln!("[vulkan validation {severity:?}] {msg}");
+        crate::note!("[vulkan validation {severity:?}] {msg}");
         let list = &*(user as *const Mutex<Vec<String>>);
         if let Ok(mut l) = list.lock() {
             l.push(msg);

@@ -97,7 +97,7 @@ impl ComputePipeline {
             );
             dev.destroy_shader_module(module, None);
             if kernel_times() {
-                eprintln!(
+                crate::note!(
                     "illum: kernel {name}: {} bytes of SPIR-V, features {:#x}, created in {:.3} s \
                      ({:.3} s of process CPU)",
                     spirv.len(),

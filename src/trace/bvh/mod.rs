@@ -529,7 +529,7 @@ mod tests {
             let bound = builder::balanced_depth(boxes.len(), 4);
             for slack in [8, 0] {
                 let (n, depth) = need(&boxes, Some(slack));
-                eprintln!(
+                crate::note!(
                     "{name}: SAH need {sah} (depth {sah_depth}); slack {slack}: need {n}, depth {depth} (bound {})",
                     bound + slack
                 );
