@@ -141,6 +141,8 @@ struct State {
     evicted: u64,
     update_paths: u64,
     update_seconds: f64,
+    /// Of it, the warm-up's: what holds back the first sample.
+    warmup_seconds: f64,
 }
 
 pub struct RadiosityCache {
@@ -200,6 +202,7 @@ impl RadiosityCache {
                 evicted: 0,
                 update_paths: 0,
                 update_seconds: 0.0,
+                warmup_seconds: 0.0,
             }),
         })
     }
@@ -277,6 +280,7 @@ impl RadiosityCache {
         st.evicted = 0;
         st.update_paths = 0;
         st.update_seconds = 0.0;
+        let t0 = Instant::now();
         self.publish(ctx, st)?; // the empty table
         let rounds = WARMUP_PATHS
             .div_ceil(self.shape.paths)
@@ -285,6 +289,7 @@ impl RadiosityCache {
             self.update(ctx, kernel, st, seed, WARMUP_INDEX + round * rounds, rounds)?;
             self.publish(ctx, st)?;
         }
+        st.warmup_seconds = t0.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -473,8 +478,8 @@ impl RadiosityCache {
             (
                 "radiosityUpdates".into(),
                 format!(
-                    "{} paths of {VERTICES} vertices in {:.3} s",
-                    st.update_paths, st.update_seconds
+                    "{} paths of {VERTICES} vertices in {:.3} s ({:.3} s of warm-up before the first sample)",
+                    st.update_paths, st.update_seconds, st.warmup_seconds
                 ),
             ),
             (
