@@ -4,16 +4,6 @@
 //! Data flows one way: scene file → [`scene::Scene`] (validated host types) → GPU scene
 //! (buffers, acceleration structures) → integrator kernels → film → outputs.
 
-/// `eprintln!` that ignores a failed write: a closed or full stderr (`illum render … 2>&1 | head
-/// -1`) must not stop a render or fail one already written (`eprintln!` panics on it).
-#[macro_export]
-macro_rules! note {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stderr(), $($arg)*);
-    }};
-}
-
 pub mod film;
 pub mod jobs;
 pub mod layout;
@@ -34,6 +24,7 @@ pub use error::{Error, Result};
 pub mod gpu_scene;
 pub mod integrators;
 pub mod metrics;
+pub mod note;
 pub mod render;
 pub mod report;
 pub mod stress;

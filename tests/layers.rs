@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 
 /// The top-level modules of `src/`, lowest layer first.
 const LAYERS: &[&[&str]] = &[
-    // The layout shared by Rust and GLSL, compiled kernels, and error metrics (pure math).
-    &["layout", "shaders", "metrics"],
+    // The layout shared by Rust and GLSL, compiled kernels, error metrics (pure math), and
+    // `note!` (messages to stderr that cannot fail a render).
+    &["layout", "shaders", "metrics", "note"],
     // The Vulkan layer: knows nothing of rendering.
     &["vk"],
     // The scene description: files in, validated host types out.
