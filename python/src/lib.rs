@@ -307,6 +307,7 @@ impl Scene {
         let mut r = run(py, ctx, settings.clone(), cancel, |r, s, progress| {
             r.render(&scene, s, progress)
         })?;
+        r.is_job = job;
         if let Some(out) = r.job.take()
             && job
             && !r.interrupted
@@ -669,8 +670,9 @@ struct Render {
     meta: ImageMetadata,
     /// Whether the film had per-pixel counts.
     has_counts: bool,
-    /// A job of a split render: what its partial EXR holds.
+    /// A job of a split render: what its partial EXR holds (None when it was interrupted).
     part: Option<(PartInfo, FilmSums)>,
+    is_job: bool,
     /// The render's output (its film moved into the arrays), until a job's part is made.
     job: Option<RenderOutput>,
 }
@@ -759,6 +761,7 @@ impl Render {
             meta,
             has_counts,
             part: None,
+            is_job: false,
             job: None,
         })
     }
@@ -810,6 +813,15 @@ impl Render {
     /// or a PNG (tone-mapped beauty) for a .png path; written to a temporary file and renamed. A
     /// job of a split render writes its partial EXR (the exact sums `illum merge` takes).
     fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        if self.is_job && self.part.is_none() {
+            // As `illum render --samples/--crop`: a job is all or nothing.
+            return Err(IllumError::new_err(format!(
+                "{}: the job was interrupted after {} samples: an incomplete job has no part to \
+                 write; render it again",
+                path.display(),
+                self.spp
+            )));
+        }
         if let Some((info, sums)) = &self.part {
             if !path
                 .extension()

@@ -88,14 +88,23 @@ def test_bad_input_raises_the_message_the_cli_prints(tmp_path):
 def test_ctrl_c_returns_the_samples_done():
     # SIGINT to the process a second into a long render, as Ctrl-C would send it.
     script = textwrap.dedent(f"""
-        import json, os, signal, threading
+        import json, os, signal, tempfile, threading
         import numpy as np
         import illum
         s = illum.load({str(INTERIOR)!r})
         s.render(spp=1, width=32)  # kernels compiled before the clock starts
         threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
         r = s.render(spp=1 << 20, width=32, integrator="path")
+        # A job stopped early has no part to write, as `illum render --samples` writes none.
+        threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        j = s.render(spp=1 << 20, width=32, integrator="path", samples=(0, 1 << 20))
+        try:
+            j.write(os.path.join(tempfile.mkdtemp(), "job.exr"))
+            refused = ""
+        except illum.IllumError as e:
+            refused = str(e)
         print(json.dumps({{"spp": r.spp, "interrupted": r.interrupted,
+                          "job_interrupted": j.interrupted, "refused": refused,
                           "finite": bool(np.isfinite(r.beauty).all()),
                           "mean": float(r.beauty.mean()),
                           "messages": illum.validation_messages()}}))
@@ -106,6 +115,7 @@ def test_ctrl_c_returns_the_samples_done():
     assert got["interrupted"] and 0 < got["spp"] < 1 << 20, got
     assert got["finite"] and got["mean"] > 0, got
     assert got["messages"] == []
+    assert got["job_interrupted"] and "incomplete job has no part" in got["refused"], got
 
 
 def test_a_prepared_scene_edit_equals_a_fresh_load_of_the_edited_scene():
