@@ -7,7 +7,6 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use illum::film::Window;
 use illum::integrators::{Direct, DirectLighting, Technique};
 use illum::jobs::{Part, merge};
 use illum::render::adaptive::{Adaptive, Target};
@@ -290,14 +289,7 @@ fn adaptive_renders_split_and_merged_equal_one_render() {
             whole.film,
             "{t:?}: sample ranges"
         );
-        let win = |x0, y0, x1, y1| Window { x0, y0, x1, y1 };
-        let tiles = [
-            win(0, 0, 5, 4),
-            win(5, 0, 13, 4),
-            win(0, 4, 7, 9),
-            win(7, 4, 13, 9),
-        ];
-        let parts: Vec<Part> = tiles
+        let parts: Vec<Part> = ODD_TILES_13X9
             .iter()
             .map(|w| {
                 render_part(

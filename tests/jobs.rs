@@ -68,13 +68,7 @@ fn split_renders_merge_bit_identical_to_one_render() {
         );
         assert_eq!(merged.spp, SPP);
         // Pixel windows of odd sizes.
-        let tiles = [
-            win(0, 0, 5, 4),
-            win(5, 0, 13, 4),
-            win(0, 4, 7, 9),
-            win(7, 4, 13, 9),
-        ];
-        let parts: Vec<Part> = tiles
+        let parts: Vec<Part> = ODD_TILES_13X9
             .iter()
             .map(|w| {
                 render_part(

@@ -366,9 +366,8 @@ void main() {
                     p.diffuse_over = !lobe_chain_next(p.sh, m, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d,
                                                       p.width_d, p.angle_d);
                 } else {
-                    p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d);
-                    p.width_d = 0.0;
-                    p.angle_d = frame.diffuse_spread;
+                    p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d,
+                                                         p.width_d, p.angle_d);
                 }
                 p.ray = RAY_DIFFUSE;
             }

@@ -44,22 +44,30 @@ bool diffuse_direction(Shading sh, inout Rng rng, out vec3 wi) {
     return c.z > 0.0 && dot(wi, sh.ng) > 0.0;
 }
 
+// Russian roulette on a path's throughput: goes on with probability min(max3(thr), 0.95), thr
+// divided by it (unbiased); false where the path ends.
+bool russian_roulette(inout vec3 thr, inout Rng rng) {
+    float q = min(max3(thr), 0.95);
+    bool go = rng_next(rng) < q;
+    thr /= q;
+    return go;
+}
+
 // A vertex of a diffuse chain (full's brute-force fallback, the cache's update paths): adds its
-// direct light dl to sum with throughput thr, draws the next direction wi; false when the chain
-// ends there (below a horizon, or Russian roulette from the third vertex on).
+// direct light dl to sum with throughput thr, draws the next direction wi and starts its ray cone
+// (width, angle); false when the chain ends there (below a horizon, or Russian roulette from the
+// third vertex on).
 bool diffuse_chain_next(Shading sh, vec3 dl, inout vec3 sum, inout vec3 thr, inout uint vertex,
-                        inout Rng rng, out vec3 wi) {
+                        inout Rng rng, out vec3 wi, out float width, out float angle) {
     sum += thr * dl;
     bool go = diffuse_direction(sh, rng, wi);
     if (go) {
         thr *= sh.albedo;
-        if (vertex >= 2u) {
-            float q = min(max3(thr), 0.95);
-            go = rng_next(rng) < q;
-            thr /= q;
-        }
+        if (vertex >= 2u) go = russian_roulette(thr, rng);
     }
     vertex += 1u;
+    width = 0.0;
+    angle = frame.diffuse_spread;
     return go;
 }
 
@@ -140,11 +148,7 @@ bool lobe_chain_next(Shading sh, GpuMaterial m, vec3 dl, inout vec3 sum, inout v
     bool go = b.valid;
     if (go) {
         thr *= b.weight;
-        if (vertex >= 2u) {
-            float q = min(max3(thr), 0.95);
-            go = rng_next(rng) < q;
-            thr /= q;
-        }
+        if (vertex >= 2u) go = russian_roulette(thr, rng);
         if (b.diffuse) {
             width = 0.0;
             angle = b.spread;

@@ -93,11 +93,7 @@ void main() {
             if (go) {
                 if (depth == 1u) first_diffuse = b.diffuse;
                 thr *= b.weight;
-                if (depth >= 3u) {
-                    float q = min(max3(thr), 0.95);
-                    go = rng_next(rng) < q;
-                    thr /= q;
-                }
+                if (depth >= 3u) go = russian_roulette(thr, rng);
                 o = sh.origin;
                 d = b.wi;
                 mask = MASK_OCCLUDERS;

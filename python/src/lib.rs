@@ -123,10 +123,7 @@ impl RenderArgs {
         }
         let integrator =
             illum::integrators::create(&name, &p).map_err(|e| err(anyhow::anyhow!(e)))?;
-        let trace: TraceMode = self
-            .trace
-            .parse()
-            .map_err(|e: String| err(anyhow::anyhow!("trace={:?}: {e}", self.trace)))?;
+        let trace = trace_mode(&self.trace)?;
         let cancel = Arc::new(AtomicBool::new(false));
         let settings = RenderSettings {
             integrator,
@@ -216,6 +213,12 @@ fn merge(py: Python<'_>, parts: &Bound<'_, PyList>) -> PyResult<Render> {
         .map_err(err)?;
     let meta = illum::cli::merge::merged_metadata(&m, n);
     Render::from_film(py, m.film, meta, m.spp, false, &[])
+}
+
+/// A `trace=` argument: auto, rayquery or bvh, as `--trace` takes it.
+fn trace_mode(s: &str) -> PyResult<TraceMode> {
+    s.parse()
+        .map_err(|e: String| err(anyhow::anyhow!("trace={s:?}: {e}")))
 }
 
 /// The value of a keyword parameter as the integrator reads it: booleans as on/off.
@@ -375,9 +378,7 @@ fn prepare(
     trace: &str,
     device: Option<String>,
 ) -> PyResult<Prepared> {
-    let trace: TraceMode = trace
-        .parse()
-        .map_err(|e: String| err(anyhow::anyhow!("trace={trace:?}: {e}")))?;
+    let trace = trace_mode(trace)?;
     let json = match &scene.json {
         Some(j) => Some((
             serde_json::from_str(&j.text).map_err(|e| err(anyhow::anyhow!("{}: {e}", j.origin)))?,
@@ -553,8 +554,8 @@ impl Prepared {
             report,
             params: RenderArgs::params(params)?,
         };
-        let (mut settings, cancel) = args.settings(&self.scene)?;
-        settings.trace = TraceMode::Auto;
+        // Trace "auto": the path the scene was prepared for.
+        let (settings, cancel) = args.settings(&self.scene)?;
         let job = SameThread((&self.prepared, &self.scene.camera));
         let mut r = run(
             py,
@@ -863,8 +864,7 @@ impl Render {
         })
     }
 
-    fn __repr__(&self, py: Python<'_>) -> String {
-        let _ = py;
+    fn __repr__(&self) -> String {
         format!(
             "<illum.Render {}x{}, {} spp{}>",
             self.width,

@@ -1,6 +1,7 @@
 //! Renders of test scenes on validated contexts, and what is read off them.
 
 use super::{assert_no_validation_messages, context, scene, temp_path, trace_mode};
+use illum::film::Window;
 use illum::jobs::Part;
 use illum::jobs::partial::{read_partial, write_partial};
 use illum::render::{RenderOutput, RenderSettings, Renderer};
@@ -126,3 +127,32 @@ pub fn render_part(r: &Renderer, scene: &Scene, s: &RenderSettings, name: &str) 
     );
     Part { path, info, sums }
 }
+
+/// Four pixel windows of odd sizes that tile a 13x9 frame, none aligned with another's edges on
+/// both axes: the crops split-render tests merge.
+pub const ODD_TILES_13X9: [Window; 4] = [
+    Window {
+        x0: 0,
+        y0: 0,
+        x1: 5,
+        y1: 4,
+    },
+    Window {
+        x0: 5,
+        y0: 0,
+        x1: 13,
+        y1: 4,
+    },
+    Window {
+        x0: 0,
+        y0: 4,
+        x1: 7,
+        y1: 9,
+    },
+    Window {
+        x0: 7,
+        y0: 4,
+        x1: 13,
+        y1: 9,
+    },
+];
