@@ -17,6 +17,7 @@ pub mod shaders {
 }
 pub mod capi;
 pub mod cli;
+pub mod compare;
 pub mod error;
 pub mod vk;
 

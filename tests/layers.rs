@@ -28,6 +28,8 @@ const LAYERS: &[&[&str]] = &[
     // Image files, then what is built on renders and files: split renders, reports.
     &["output"],
     &["jobs", "report"],
+    // Comparisons of integrators, techniques and allocations at equal time: on reports.
+    &["compare"],
     // Tools and front ends.
     &["stress"],
     &["cli", "capi"],

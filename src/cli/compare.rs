@@ -3,14 +3,14 @@
 
 use super::render::{announce_compiles, progress_bar};
 use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
+use crate::compare::{Budget, Comparison, Run, Samples, Spec, parse_samples};
 use crate::integrators::Technique;
 use crate::output::write_exr;
-use crate::render::{Integrator, PassReport, RenderOutput, RenderSettings, Renderer};
+use crate::render::{RenderOutput, RenderSettings, Renderer};
 use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
 #[derive(clap::Args)]
@@ -60,146 +60,6 @@ pub struct CompareArgs {
     pub quiet: bool,
 }
 
-/// One sample allocation of `--samples`.
-#[derive(Clone, Debug)]
-pub struct Samples {
-    light: u32,
-    brdf: u32,
-    diffuse_mis: Option<bool>,
-    name: String,
-}
-
-fn parse_samples(s: &str) -> Result<Samples, String> {
-    let bad = || format!("{s:?}: expected L/B, L/B/dmis or L/B/nodmis (L, B in 1..=64)");
-    let parts: Vec<&str> = s.split('/').collect();
-    let count = |p: &str| p.parse::<u32>().ok().filter(|n| (1..=64).contains(n));
-    let (Some(light), Some(brdf)) = (
-        parts.first().and_then(|p| count(p)),
-        parts.get(1).and_then(|p| count(p)),
-    ) else {
-        return Err(bad());
-    };
-    let diffuse_mis = match parts.get(2..) {
-        Some([]) => None,
-        Some(["dmis"]) => Some(true),
-        Some(["nodmis"]) => Some(false),
-        _ => return Err(bad()),
-    };
-    Ok(Samples {
-        light,
-        brdf,
-        diffuse_mis,
-        name: parts.join("-"),
-    })
-}
-
-/// One rendering of the comparison: its name and integrator.
-struct Run {
-    name: String,
-    integrator: Arc<dyn Integrator>,
-}
-
-/// A name `--integrators` takes besides the integrators' own: (name, integrator, parameters).
-type Alias = (
-    &'static str,
-    &'static str,
-    &'static [(&'static str, &'static str)],
-);
-
-const ALIASES: &[Alias] = &[
-    ("full-nocache", "full", &[("radiosity_cache", "off")]),
-    ("full-nocaustics", "full", &[("caustics", "off")]),
-];
-
-fn alias_names() -> String {
-    let n: Vec<&str> = ALIASES.iter().map(|a| a.0).collect();
-    n.join(", ")
-}
-
-fn runs(a: &CompareArgs, scene: &crate::scene::Scene) -> Result<Vec<Run>> {
-    let techniques = match &a.techniques {
-        Some(t) => t.clone(),
-        None if a.integrators.is_empty() && a.samples.is_empty() => {
-            vec![Technique::Brdf, Technique::Light, Technique::Mis]
-        }
-        None => vec![Technique::Mis],
-    };
-    if techniques.is_empty() {
-        bail!("--techniques: name at least one of brdf, light, mis");
-    }
-    let mut runs = Vec::new();
-    let integrators: Vec<Option<&str>> = if a.integrators.is_empty() {
-        vec![None]
-    } else {
-        a.integrators.iter().map(|s| Some(s.as_str())).collect()
-    };
-    let samples: Vec<Option<&Samples>> = if a.samples.is_empty() {
-        vec![None]
-    } else {
-        a.samples.iter().map(Some).collect()
-    };
-    for (integrator, sa) in integrators
-        .iter()
-        .flat_map(|i| samples.iter().map(move |s| (i, s)))
-    {
-        for &t in &techniques {
-            let (kind, extra): (String, &[(&str, &str)]) = match integrator {
-                Some(spec) => match ALIASES.iter().find(|(n, ..)| n == spec) {
-                    Some((_, kind, extra)) => (kind.to_string(), extra),
-                    None => (spec.to_string(), &[]),
-                },
-                None => (a.integrator.name(scene), &[]),
-            };
-            let mut p = a.integrator.params(&kind, scene)?;
-            p.set("technique", t.name(), "--techniques");
-            if let Some(sa) = sa {
-                p.set("light_samples", sa.light.to_string(), "--samples");
-                p.set("brdf_samples", sa.brdf.to_string(), "--samples");
-                if let Some(d) = sa.diffuse_mis {
-                    p.set("diffuse_mis", if d { "on" } else { "off" }, "--samples");
-                }
-            }
-            for (k, v) in extra {
-                p.set(k, *v, format!("--integrators {}", integrator.unwrap_or("")));
-            }
-            let it = crate::integrators::create(&kind, &p).map_err(|e| {
-                anyhow::anyhow!(
-                    "{e}{}",
-                    if integrator.is_some() {
-                        format!(" (or one of the aliases: {})", alias_names())
-                    } else {
-                        String::new()
-                    }
-                )
-            })?;
-            let mut name = match (integrator, techniques.len()) {
-                (None, _) => t.name().to_string(),
-                (Some(i), 1) => i.to_string(),
-                (Some(i), _) => format!("{i}-{}", t.name()),
-            };
-            if let Some(sa) = sa {
-                name = if integrator.is_none() && techniques.len() == 1 {
-                    sa.name.clone()
-                } else {
-                    format!("{name}-{}", sa.name)
-                };
-            }
-            if runs.iter().any(|r: &Run| r.name == name) {
-                bail!(
-                    "--techniques, --integrators, --samples: {name} is named twice (each renders once, to \
-                     {}-{name}.exr)",
-                    a.output.display()
-                );
-            }
-            runs.push(Run {
-                name,
-                integrator: it,
-            });
-        }
-    }
-    Ok(runs)
-}
-
 /// The files a comparison writes: one EXR per run, the error plot and the image strip.
 struct Outputs {
     exrs: Vec<PathBuf>,
@@ -234,9 +94,31 @@ impl Outputs {
     }
 }
 
+/// The comparison's runs, as the options name them.
+fn spec<'a>(
+    a: &'a CompareArgs,
+    scene: &crate::scene::Scene,
+    params: &'a dyn Fn(&str) -> Result<crate::render::Params, String>,
+) -> Spec<'a> {
+    Spec {
+        techniques: a.techniques.clone(),
+        integrators: a.integrators.clone(),
+        samples: a.samples.clone(),
+        default_integrator: a.integrator.name(scene),
+        params,
+        arg: |n| format!("--{n}"),
+    }
+}
+
 pub fn run(a: &CompareArgs) -> Result<()> {
     let scene = a.scene.load()?;
-    let runs = runs(a, &scene)?;
+    let params = |kind: &str| {
+        a.integrator
+            .params(kind, &scene)
+            .map_err(|e| format!("{e:#}"))
+    };
+    let spec = spec(a, &scene, &params);
+    let runs = spec.runs()?;
     let files = Outputs::new(a, &runs)?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a
@@ -250,19 +132,20 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         validation: false,
     })?;
     let renderer = Renderer::new(ctx.clone());
-    let mut rows: Vec<(String, RenderOutput)> = Vec::new();
+    let budget = Budget {
+        time: a.time,
+        seed: a.seed,
+        trace: a.trace,
+        reference: reference.clone(),
+        cancel: Some(cancel.clone()),
+    };
+    let mut cmp = Comparison {
+        runs: Vec::new(),
+        measured: reference.is_some(),
+        time: a.time,
+    };
     for (run, exr) in runs.iter().zip(&files.exrs) {
-        let settings = RenderSettings {
-            integrator: run.integrator.clone(),
-            spp: 1 << 20,
-            time: Some(a.time),
-            seed: a.seed,
-            trace: a.trace,
-            reference: reference.clone(),
-            evaluate_passes: true,
-            cancel: Some(cancel.clone()),
-            ..Default::default()
-        };
+        let settings = budget.settings(run);
         let out = render_run(a, &renderer, &scene, &settings, &run.name)?;
         write_exr(
             exr,
@@ -282,21 +165,11 @@ pub fn run(a: &CompareArgs) -> Result<()> {
             }
             .into());
         }
-        rows.push((run.name.clone(), out));
+        cmp.runs.push((run.name.clone(), out));
     }
-    let measured = reference.is_some();
-    let series = print_table(a, &rows, measured);
-    crate::report::plot_error(
-        &files.plot,
-        &format!("{:.1} s each", a.time),
-        if measured {
-            "relMSE"
-        } else {
-            "estimated relMSE (half-buffers)"
-        },
-        &series,
-    )?;
-    write_strip(&files.strip, &rows, reference.as_deref())?;
+    print_table(spec.kind(), &cmp);
+    cmp.write_plot(&files.plot)?;
+    cmp.write_strip(&files.strip, reference.as_deref())?;
     if !a.quiet {
         crate::note!(
             "illum compare: wrote {}, {} and {}-<name>.exr",
@@ -335,137 +208,29 @@ fn render_run(
     Ok(out?)
 }
 
-/// A pass's relMSE: against the reference when there is one, else the half-buffer estimate.
-fn error_of(p: &PassReport, measured: bool) -> Option<f64> {
-    if measured {
-        p.error.map(|e| e.relmse)
-    } else {
-        p.estimated_relmse
-    }
-}
-
-/// Prints the table of runs and returns their error-against-time curves.
-fn print_table(
-    a: &CompareArgs,
-    rows: &[(String, RenderOutput)],
-    measured: bool,
-) -> Vec<crate::report::Series> {
+/// Prints the table of runs.
+fn print_table(kind: &str, cmp: &Comparison) {
     println!(
         "{:<14} {:>8} {:>10} {:>14} {:>14}",
-        match (a.integrators.is_empty(), a.samples.is_empty()) {
-            (true, true) => "technique",
-            (false, true) => "integrator",
-            _ => "run",
-        },
+        kind,
         "spp",
         "seconds",
-        if measured { "relMSE" } else { "est. relMSE" },
+        if cmp.measured {
+            "relMSE"
+        } else {
+            "est. relMSE"
+        },
         "efficiency"
     );
-    let mut series = Vec::new();
-    for (t, out) in rows {
-        let last = out.passes.last().cloned().unwrap_or_default();
-        let err = error_of(&last, measured).unwrap_or(f64::NAN);
+    for r in cmp.rows() {
         println!(
             "{:<14} {:>8} {:>10.3} {:>14.4e} {:>14.4e}",
-            t,
-            last.spp,
-            last.wall_seconds,
-            err,
-            1.0 / (err * last.wall_seconds)
+            r.name, r.spp, r.seconds, r.relmse, r.efficiency
         );
-        series.push(crate::report::Series {
-            name: t.clone(),
-            points: out
-                .passes
-                .iter()
-                .filter_map(|p| Some((p.wall_seconds, error_of(p, measured)?)))
-                .collect(),
-        });
     }
-    if !measured {
+    if !cmp.measured {
         println!(
             "(no --reference: relMSE estimated from the even/odd half-buffers; the estimate cannot see bias)"
         );
-    }
-    series
-}
-
-/// The strip of the runs' images, each with its error map.
-fn write_strip(
-    path: &std::path::Path,
-    rows: &[(String, RenderOutput)],
-    reference: Option<&[[f32; 3]]>,
-) -> Result<()> {
-    let measured = reference.is_some();
-    let maps: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|(_, out)| match reference {
-            Some(r) => crate::report::relative_error_map(&out.film.beauty, r),
-            None => variance_map(out),
-        })
-        .collect();
-    let panels: Vec<crate::report::Panel> = rows
-        .iter()
-        .zip(maps)
-        .map(|((t, out), error)| crate::report::Panel {
-            label: format!(
-                "{} {}spp {:.1e}",
-                t,
-                out.stats.spp,
-                out.passes
-                    .last()
-                    .and_then(|p| error_of(p, measured))
-                    .unwrap_or(f64::NAN)
-            ),
-            film: &out.film,
-            error,
-        })
-        .collect();
-    crate::report::image_strip(path, &panels)?;
-    Ok(())
-}
-
-/// Per-pixel variance of the mean over the squared pixel value: the half-buffer view of the
-/// error, from the Variance AOV.
-fn variance_map(out: &RenderOutput) -> Vec<f64> {
-    let var = out.film.variance.as_ref();
-    out.film
-        .beauty
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            (0..3)
-                .map(|c| {
-                    let v = var.map_or(0.0, |v| f64::from(v[i][c]));
-                    v / (f64::from(p[c]).powi(2) + crate::metrics::RELMSE_EPSILON)
-                })
-                .sum::<f64>()
-                / 3.0
-        })
-        .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::parse_samples;
-
-    #[test]
-    fn samples_lists_parse_and_bad_ones_are_named() {
-        let s = parse_samples("4/2").unwrap();
-        assert_eq!(
-            (s.light, s.brdf, s.diffuse_mis, s.name.as_str()),
-            (4, 2, None, "4-2")
-        );
-        let s = parse_samples("1/1/dmis").unwrap();
-        assert_eq!((s.light, s.brdf, s.diffuse_mis), (1, 1, Some(true)));
-        assert_eq!(
-            parse_samples("8/3/nodmis").unwrap().diffuse_mis,
-            Some(false)
-        );
-        for bad in ["", "4", "0/1", "65/1", "4/2/x", "4/2/dmis/1", "a/b"] {
-            let e = parse_samples(bad).unwrap_err();
-            assert!(e.contains(&format!("{bad:?}")), "{bad}: {e}");
-        }
     }
 }
