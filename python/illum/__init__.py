@@ -10,10 +10,12 @@ write it as `illum render` does.
 Errors are `illum.IllumError`, with the message the command line prints.
 """
 from ._illum import (
+    Comparison,
     IllumError,
     Prepared,
     Render,
     Scene,
+    compare,
     default_scene,
     devices,
     load,
@@ -23,10 +25,12 @@ from ._illum import (
 )
 
 __all__ = [
+    "Comparison",
     "IllumError",
     "Prepared",
     "Render",
     "Scene",
+    "compare",
     "default_scene",
     "devices",
     "load",

@@ -53,6 +53,8 @@ class Render:
     aovs: dict[str, npt.NDArray[np.float32]]
     metadata: dict[str, str]
     report: dict[str, npt.NDArray[np.float64]]
+    """Per pass (report=True; else the last): spp, wall_seconds, device_seconds,
+    estimated_relmse, relmse (against compare's reference; NaN where unknown)."""
     spp: int
     interrupted: bool
     @property
@@ -94,6 +96,39 @@ def prepare(scene: Scene, trace: str = "auto", device: str | None = None) -> Pre
 
 def merge(parts: list[Render] | list[str | PathLike[str]]) -> Render:
     """Joins the jobs of a split render (results or partial EXRs) into the whole image, bit for bit."""
+
+class Comparison:
+    """A comparison's runs: each one's render by name and the table `illum compare` prints."""
+
+    names: list[str]
+    renders: dict[str, Render]
+    table: list[dict[str, Any]]
+    measured: bool
+    kind: str
+
+def compare(
+    scene: Scene,
+    time: float = 5.0,
+    techniques: list[str] | str | None = None,
+    integrators: list[str] | str | None = None,
+    samples: list[str] | str | None = None,
+    reference: str | PathLike[str] | npt.ArrayLike | None = None,
+    seed: int = 0,
+    integrator: str | None = None,
+    width: int | None = None,
+    height: int | None = None,
+    trace: str = "auto",
+    device: str | None = None,
+    output: str | PathLike[str] | None = None,
+    **params: Any,
+) -> Comparison:
+    """Renders each run for `time` seconds as `illum compare` does with the same options.
+
+    `techniques` (brdf, light, mis), `integrators` (direct, full, path, full-nocache,
+    full-nocaustics) and `samples` ("L/B", "L/B/dmis", "L/B/nodmis") as the CLI's options;
+    `reference` an EXR's path or a (height, width, 3) array (else the relMSE is estimated from
+    the half-buffers); `output=PREFIX` writes PREFIX-<name>.exr, PREFIX-error.png and
+    PREFIX-strip.png. Ctrl-C raises KeyboardInterrupt."""
 
 def load(path: str | PathLike[str]) -> Scene:
     """Loads and validates a scene file (JSON or glTF)."""

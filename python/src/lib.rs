@@ -20,6 +20,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+mod compare;
+
 create_exception!(
     _illum,
     IllumError,
@@ -97,13 +99,17 @@ struct RenderArgs {
 }
 
 impl RenderArgs {
-    fn params(kw: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String, String)>> {
+    /// Keyword parameters as (name, text, origin); `call` names the function in the origin.
+    fn params(
+        kw: Option<&Bound<'_, PyDict>>,
+        call: &str,
+    ) -> PyResult<Vec<(String, String, String)>> {
         let mut out = Vec::new();
         if let Some(kw) = kw {
             for (k, v) in kw.iter() {
                 let k: String = k.extract()?;
                 let text = param_text(&v)?;
-                let origin = format!("render({k}={})", v.repr()?);
+                let origin = format!("{call}({k}={})", v.repr()?);
                 out.push((k, text, origin));
             }
         }
@@ -142,7 +148,39 @@ impl RenderArgs {
     }
 }
 
-/// Runs `render` with the GIL released, Ctrl-C setting `cancel`, and makes its result.
+/// What a render with the GIL released gives back: its output, the device's name, its settings
+/// and whether KeyboardInterrupt stopped it.
+type Detached = (illum::Result<RenderOutput>, String, RenderSettings, bool);
+
+/// Runs `render` with the GIL released and Ctrl-C setting `cancel`.
+fn detached(
+    py: Python<'_>,
+    ctx: Context,
+    settings: RenderSettings,
+    cancel: Arc<AtomicBool>,
+    render: impl FnOnce(
+        &Renderer,
+        &RenderSettings,
+        &mut dyn FnMut(u32, u32),
+    ) -> illum::Result<RenderOutput>,
+) -> Detached {
+    let job = SameThread((ctx, settings, render));
+    py.detach(move || {
+        let (ctx, settings, render) = job.get();
+        let mut stopped = false;
+        let r = render(&Renderer::new(ctx.clone()), &settings, &mut |_, _| {
+            // Python's SIGINT handler runs here; KeyboardInterrupt stops the render.
+            if !stopped && Python::attach(|py| py.check_signals()).is_err() {
+                stopped = true;
+                cancel.store(true, Ordering::SeqCst);
+            }
+        });
+        SameThread((r, ctx.info().name.clone(), settings, stopped))
+    })
+    .0
+}
+
+/// Runs `render` as [`detached`] does and makes its result.
 fn run(
     py: Python<'_>,
     ctx: Context,
@@ -154,21 +192,7 @@ fn run(
         &mut dyn FnMut(u32, u32),
     ) -> illum::Result<RenderOutput>,
 ) -> PyResult<Render> {
-    let job = SameThread((ctx, settings, render));
-    let (out, device_name, settings, stopped) = py
-        .detach(move || {
-            let (ctx, settings, render) = job.get();
-            let mut stopped = false;
-            let r = render(&Renderer::new(ctx.clone()), &settings, &mut |_, _| {
-                // Python's SIGINT handler runs here; KeyboardInterrupt stops the render.
-                if !stopped && Python::attach(|py| py.check_signals()).is_err() {
-                    stopped = true;
-                    cancel.store(true, Ordering::SeqCst);
-                }
-            });
-            SameThread((r, ctx.info().name.clone(), settings, stopped))
-        })
-        .0;
+    let (out, device_name, settings, stopped) = detached(py, ctx, settings, cancel, render);
     let out = out.map_err(err)?;
     let meta = illum::cli::image_metadata(&out, &settings, &device_name);
     Render::new(py, out, meta, stopped)
@@ -300,7 +324,7 @@ impl Scene {
             integrator,
             trace: trace.to_string(),
             report,
-            params: RenderArgs::params(params)?,
+            params: RenderArgs::params(params, "render")?,
         };
         let (mut settings, cancel) = args.settings(&scene)?;
         settings.samples = samples;
@@ -552,7 +576,7 @@ impl Prepared {
             integrator,
             trace: "auto".into(),
             report,
-            params: RenderArgs::params(params)?,
+            params: RenderArgs::params(params, "render")?,
         };
         // Trace "auto": the path the scene was prepared for.
         let (settings, cancel) = args.settings(&self.scene)?;
@@ -656,7 +680,8 @@ struct Render {
     #[pyo3(get)]
     metadata: Py<PyDict>,
     /// One entry per pass (with report=True; else the last): arrays spp, wall_seconds,
-    /// device_seconds, estimated_relmse (NaN where unknown).
+    /// device_seconds, estimated_relmse and relmse (against a reference: `illum.compare`'s; NaN
+    /// where unknown).
     #[pyo3(get)]
     report: Py<PyDict>,
     /// Samples per pixel rendered.
@@ -741,6 +766,7 @@ impl Render {
             "estimated_relmse",
             col(&|p| p.estimated_relmse.unwrap_or(f64::NAN)),
         )?;
+        rep.set_item("relmse", col(&|p| p.error.map_or(f64::NAN, |e| e.relmse)))?;
         Ok(Render {
             beauty: rgb(film.beauty)?,
             albedo: rgb(film.albedo)?,
@@ -887,6 +913,8 @@ fn _illum(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Prepared>()?;
     m.add_function(wrap_pyfunction!(prepare, m)?)?;
     m.add_function(wrap_pyfunction!(merge, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
+    m.add_class::<compare::Comparison>()?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(default_scene, m)?)?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;

@@ -3,38 +3,16 @@ same settings, the same error messages, Ctrl-C keeping the samples done, and mem
 grow over a loop of renders. Run by scripts/test.sh (ILLUM_BIN names the CLI binary)."""
 import json
 import os
-import pathlib
 import subprocess
 import sys
 import textwrap
 
 import numpy as np
-import OpenEXR
 import pytest
 
 import illum
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-BIN = os.environ.get("ILLUM_BIN", str(ROOT / "target" / "release" / "illum"))
-INTERIOR = ROOT / "scenes" / "interior.json"
-
-
-@pytest.fixture(autouse=True)
-def no_validation_messages():
-    """Every test runs with the validation layers on (ILLUM_VALIDATION=1, scripts/test.sh) and
-    fails on any message they give."""
-    yield
-    assert illum.validation_messages() == []
-
-
-def channels(path):
-    """Every channel of an EXR as float32 arrays, by name."""
-    with OpenEXR.File(str(path), separate_channels=True) as f:
-        return {name: np.array(c.pixels, dtype=np.float32) for name, c in f.channels().items()}
-
-
-def cli(*args):
-    return subprocess.run([BIN, *map(str, args)], capture_output=True, text=True)
+from conftest import INTERIOR, channels, cli
 
 
 def test_a_render_equals_illum_render_bit_for_bit(tmp_path):
