@@ -81,11 +81,15 @@ if [ ! -x "$venv/bin/kubernetes-validate" ]; then
   "$venv/bin/pip" install -q --disable-pip-version-check kubernetes-validate==1.37.0
 fi
 # The Python module (python/, `import illum`): maturin builds it, pytest runs its tests against
-# the CLI, OpenEXR reads both renders' files (scripts/test.sh builds and installs the wheel).
+# the CLI, OpenEXR reads both renders' files (scripts/test.sh builds and installs the wheel);
+# Pixar's usd-core authors the USD stages of the USD tests (an independent writer and reader).
 pyvenv="$here/.venv-py"
 if [ ! -x "$pyvenv/bin/maturin" ]; then
   python3 -m venv "$pyvenv"
   "$pyvenv/bin/pip" install -q --disable-pip-version-check maturin==1.16.0 numpy==2.4.6 \
     pytest==9.2.0 OpenEXR==3.5.3
+fi
+if ! "$pyvenv/bin/python" -c "import pxr" 2>/dev/null; then
+  "$pyvenv/bin/pip" install -q --disable-pip-version-check usd-core==26.11
 fi
 echo "setup-debian: ok (mesa $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers); stock lavapipe at $stock)"

@@ -200,6 +200,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
         ],
         description: None,
         integrator: Default::default(),
+        warnings: Vec::new(),
         source: None,
     }
 }
@@ -621,6 +622,7 @@ fn the_compute_bvh_takes_degenerate_meshes() {
         description: None,
         source: None,
         integrator: Default::default(),
+        warnings: Vec::new(),
     };
     let settings = RenderSettings {
         spp: 1,

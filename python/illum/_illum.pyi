@@ -17,6 +17,9 @@ class Scene:
     @property
     def resolution(self) -> tuple[int, int]:
         """The camera's (width, height)."""
+    @property
+    def warnings(self) -> list[str]:
+        """What the file holds that illum does not render (a USD stage's prim and attribute)."""
     def render(
         self,
         spp: int | None = None,
@@ -131,7 +134,7 @@ def compare(
     PREFIX-strip.png. Ctrl-C raises KeyboardInterrupt."""
 
 def load(path: str | PathLike[str]) -> Scene:
-    """Loads and validates a scene file (JSON or glTF)."""
+    """Loads and validates a scene file: JSON, or a USD stage (.usd, .usda, .usdc, .usdz)."""
 
 def default_scene() -> Scene:
     """The built-in default scene."""

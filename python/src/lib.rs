@@ -280,6 +280,13 @@ impl Scene {
         })
     }
 
+    /// What the scene file holds that illum does not render, each naming where it is (a USD
+    /// stage's prim and attribute); `illum render --strict` refuses such a scene.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner.warnings.clone()
+    }
+
     /// The camera's resolution, (width, height).
     #[getter]
     fn resolution(&self) -> (u32, u32) {
@@ -355,7 +362,7 @@ impl Scene {
 /// The origin a scene from a dict has in messages.
 const DICT: &str = "the scene dict";
 
-/// Loads and validates a scene file (JSON or glTF), as `illum render FILE` does.
+/// Loads and validates a scene file (JSON or a USD stage), as `illum render FILE` does.
 #[pyfunction]
 fn load(path: PathBuf) -> PyResult<Scene> {
     let inner = illum::scene::load(&path).map_err(err)?;

@@ -96,7 +96,8 @@ impl std::error::Error for Interrupted {}
 /// Scene file (or the default scene) and resolution override, shared by render and compare.
 #[derive(clap::Args, Clone)]
 pub struct SceneArgs {
-    /// Scene file (.json); omit it for the embedded default scene (scenes/default.json).
+    /// Scene file: illum's JSON (.json) or a USD stage (.usd, .usda, .usdc, .usdz); omit it for
+    /// the embedded default scene (scenes/default.json).
     pub scene: Option<PathBuf>,
     /// Image width in pixels; the height follows the camera's aspect ratio unless --height is
     /// given too. [default: the scene camera's resolution]
@@ -106,6 +107,10 @@ pub struct SceneArgs {
     /// given too. [default: the scene camera's resolution]
     #[arg(long)]
     pub height: Option<u32>,
+    /// Refuse a scene with warnings (what a USD stage holds that illum does not render) instead
+    /// of printing them and rendering the rest.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 impl SceneArgs {
@@ -114,6 +119,21 @@ impl SceneArgs {
             Some(p) => crate::scene::load(p)?,
             None => crate::scene::default_scene(),
         };
+        if !scene.warnings.is_empty() {
+            let list = scene.warnings.join("\n  ");
+            if self.strict {
+                anyhow::bail!(
+                    "{}: --strict: {} warning(s):\n  {list}",
+                    self.name(),
+                    scene.warnings.len()
+                );
+            }
+            crate::note!(
+                "illum: {}: {} warning(s) (--strict refuses them):\n  {list}",
+                self.name(),
+                scene.warnings.len()
+            );
+        }
         scene
             .camera
             .set_resolution(self.width, self.height)

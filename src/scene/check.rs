@@ -80,6 +80,11 @@ impl Ctx<'_> {
 
     /// A finite, non-zero vector, returned normalized.
     pub fn direction(&self, field: &str, v: V3) -> Result<DVec3> {
+        self.direction_of(|| field.to_string(), v)
+    }
+
+    /// [`Ctx::direction`] with the field's name made only for the error (per-vertex data).
+    pub fn direction_of(&self, field: impl FnOnce() -> String, v: V3) -> Result<DVec3> {
         let d = DVec3::from_array(v);
         // Divide by the largest component first so that huge or tiny vectors normalize too.
         let m = d.abs().max_element();
@@ -87,7 +92,7 @@ impl Ctx<'_> {
         if d.is_finite() && m > 0.0 && unit.is_normalized() {
             Ok(unit)
         } else {
-            Err(self.err(field, fmt_vec(&v), "must be a non-zero finite vector"))
+            Err(self.err(field(), fmt_vec(&v), "must be a non-zero finite vector"))
         }
     }
 

@@ -177,6 +177,7 @@ pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<S
             Some(d) => integrator_choice(origin, d)?,
             None => IntegratorChoice::default(),
         },
+        warnings: Vec::new(),
     })
 }
 
@@ -512,9 +513,9 @@ impl Builder<'_> {
         }
         let mut positions = Vec::with_capacity(n);
         for (i, p) in m.positions.iter().enumerate() {
-            let field = format!("{f}.positions[{i}]");
             let v = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
             if !v.is_finite() {
+                let field = format!("{f}.positions[{i}]");
                 return Err(ctx.err(field, fmt_vec(p), "must be finite (as 32-bit floats)"));
             }
             positions.push(v);
@@ -536,7 +537,8 @@ impl Builder<'_> {
                 per_vertex("normals", normals.len())?;
                 let mut out = Vec::with_capacity(n);
                 for (i, v) in normals.iter().enumerate() {
-                    out.push(ctx.direction(&format!("{f}.normals[{i}]"), *v)?.as_vec3());
+                    let field = || format!("{f}.normals[{i}]");
+                    out.push(ctx.direction_of(field, *v)?.as_vec3());
                 }
                 Some(out)
             }
@@ -563,11 +565,11 @@ impl Builder<'_> {
                 per_vertex("tangents", tangents.len())?;
                 let mut out = Vec::with_capacity(n);
                 for (i, t) in tangents.iter().enumerate() {
-                    let field = format!("{f}.tangents[{i}]");
-                    let xyz = ctx.direction(&field, [t[0], t[1], t[2]])?.as_vec3();
+                    let field = || format!("{f}.tangents[{i}]");
+                    let xyz = ctx.direction_of(field, [t[0], t[1], t[2]])?.as_vec3();
                     if t[3] != 1.0 && t[3] != -1.0 {
                         return Err(ctx.err(
-                            field,
+                            field(),
                             fmt_vec(t),
                             "w (the handedness) must be 1 or -1",
                         ));
@@ -619,6 +621,14 @@ impl Builder<'_> {
 /// Reads a scene file; its directory is the base for relative paths.
 pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     let origin = path.display().to_string();
+    if super::usd::is_usd(path) {
+        let (file, warnings) = super::usd::load(path)?;
+        // Asset paths come resolved (absolute); anything relative is the stage's folder's.
+        let mut scene = build(&file, &origin, path.parent().unwrap_or(Path::new("")))?;
+        scene.source = Some(path.to_path_buf());
+        scene.warnings = warnings;
+        return Ok(scene);
+    }
     let io = |e: std::io::Error| SceneError::Io {
         file: origin.clone(),
         message: io_message(&e),

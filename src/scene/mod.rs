@@ -1,4 +1,4 @@
-//! Scene description: the JSON file format, its validation, glTF loading, and the validated
+//! Scene description: the JSON file format, its validation, glTF and USD loading, and the validated
 //! host-side scene the renderer consumes. See docs/scene-format.md.
 
 mod builder;
@@ -15,6 +15,7 @@ mod schema;
 mod texture;
 mod transform;
 mod types;
+mod usd;
 
 pub use builder::SceneBuilder;
 pub(crate) use error::io_message;

@@ -28,6 +28,9 @@ pub struct Scene {
     pub source: Option<PathBuf>,
     /// The file's `integrator` section: defaults that the command line overrides.
     pub integrator: IntegratorChoice,
+    /// What the file holds that illum does not render, each naming where it is (a USD stage's
+    /// prim and attribute); `illum render` prints them and `--strict` refuses the scene.
+    pub warnings: Vec<String>,
 }
 
 /// A scene's integrator defaults: the integrator's name (None: the renderer's default) and its

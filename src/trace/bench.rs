@@ -79,6 +79,7 @@ pub fn mesh_scene(mesh: Mesh, eye: DVec3, size: u32) -> Scene {
         lights: Vec::new(),
         description: None,
         integrator: Default::default(),
+        warnings: Vec::new(),
         source: None,
     }
 }

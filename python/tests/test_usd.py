@@ -1,0 +1,467 @@
+"""USD stages, authored here with Pixar's own library (usd-core's `pxr`), against the same scenes
+written in illum's JSON: each stage renders as its JSON twin, light units follow the UsdLux
+definition computed here, transforms compose as pxr composes them, and bad stages fail naming
+the prim and attribute."""
+import json
+import math
+
+import numpy as np
+import OpenEXR
+import pytest
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux, UsdRender, UsdShade
+
+import illum
+
+from conftest import cli
+
+F32 = lambda x: float(np.float32(x))  # noqa: E731 (what a float attribute stores)
+
+
+def new_stage(path, up="Y"):
+    s = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(s, up)
+    return s
+
+
+def camera(s, translate, size=(48, 32), rotate=None, focal=35.0):
+    cam = UsdGeom.Camera.Define(s, "/Cam")
+    api = UsdGeom.XformCommonAPI(cam)
+    api.SetTranslate(translate)
+    if rotate:
+        api.SetRotate(rotate)
+    cam.CreateFocalLengthAttr(focal)
+    rs = UsdRender.Settings.Define(s, "/Render/Settings")
+    rs.CreateResolutionAttr(Gf.Vec2i(*size))
+    rs.CreateCameraRel().SetTargets([cam.GetPath()])
+    return cam
+
+
+def fov_y(size, focal=35.0, h_ap=20.955, v_ap=15.2908):
+    """UsdGeomCamera's vertical field of view under expandAperture (the default policy)."""
+    h_ap, v_ap, focal = F32(h_ap), F32(v_ap), F32(focal)
+    v = max(v_ap, h_ap / (size[0] / size[1]))
+    return math.degrees(2 * math.atan(v / (2 * focal)))
+
+
+def json_camera(position, look_at, size=(48, 32), up=(0, 1, 0), focal=35.0):
+    return {"position": list(position), "look_at": list(look_at), "up": list(up),
+            "fov_y": fov_y(size, focal), "resolution": list(size)}
+
+
+def mesh(s, path, points, counts, indices):
+    m = UsdGeom.Mesh.Define(s, path)
+    m.CreatePointsAttr(points)
+    m.CreateFaceVertexCountsAttr(counts)
+    m.CreateFaceVertexIndicesAttr(indices)
+    m.CreateSubdivisionSchemeAttr("none")
+    return m
+
+
+def preview(s, path, **inputs):
+    mat = UsdShade.Material.Define(s, path)
+    sh = UsdShade.Shader.Define(s, path + "/Surface")
+    sh.CreateIdAttr("UsdPreviewSurface")
+    for k, v in inputs.items():
+        t = Sdf.ValueTypeNames.Color3f if isinstance(v, tuple) else Sdf.ValueTypeNames.Float
+        sh.CreateInput(k, t).Set(v)
+    mat.CreateSurfaceOutput().ConnectToSource(sh.ConnectableAPI(), "surface")
+    return mat
+
+
+def bind(prim, mat):
+    UsdShade.MaterialBindingAPI.Apply(prim.GetPrim()).Bind(mat)
+
+
+def ggx(base, roughness, metallic=0.0, ior=1.5):
+    """illum's mapping of a metallic-roughness UsdPreviewSurface (docs/scene-format.md)."""
+    base = [F32(c) for c in base]
+    d = ((F32(ior) - 1) / (F32(ior) + 1)) ** 2
+    m = F32(metallic)
+    return {"diffuse": [c * (1 - m) for c in base],
+            "specular": [{"model": "ggx", "roughness": F32(roughness) ** 2,
+                          "fresnel": {"schlick": [d + (c - d) * m for c in base]}}]}
+
+
+def render(scene, **kw):
+    kw.setdefault("spp", 4)
+    return scene.render(**kw).beauty
+
+
+def twin(d, tmp_path):
+    return illum.Scene.from_dict(d, base_dir=tmp_path)
+
+
+FLOOR = [(-3, 0, -3), (-3, 0, 3), (3, 0, 3), (3, 0, -3)]
+
+
+def test_a_stage_renders_bit_for_bit_as_its_json_twin(tmp_path):
+    s = new_stage(tmp_path / "row.usda")
+    camera(s, (0, 1, 6))
+    mesh(s, "/World/Floor", FLOOR, [4], [0, 1, 2, 3])
+    ball = UsdGeom.Sphere.Define(s, "/World/Ball")
+    ball.CreateRadiusAttr(0.5)
+    UsdGeom.XformCommonAPI(ball).SetTranslate((0, 0.5, 0))
+    bind(ball, preview(s, "/Looks/Clay", diffuseColor=(0.7, 0.2, 0.1), roughness=0.4))
+    bulb = UsdLux.SphereLight.Define(s, "/Lights/Bulb")
+    bulb.CreateRadiusAttr(0.25)
+    bulb.CreateIntensityAttr(30)
+    bulb.CreateExposureAttr(1)
+    bulb.CreateColorAttr((1, 0.9, 0.8))
+    UsdGeom.XformCommonAPI(bulb).SetTranslate((1.5, 2, 1))
+    UsdLux.DomeLight.Define(s, "/Lights/Sky").CreateIntensityAttr(0.2)
+    s.Save()
+    d = {
+        "camera": json_camera((0, 1, 6), (0, 1, 5)),
+        "materials": {"clay": ggx((0.7, 0.2, 0.1), 0.4), "grey": {"diffuse": [F32(0.18)] * 3}},
+        "shapes": {
+            "floor": {"mesh": {"positions": FLOOR, "indices": [0, 1, 2, 0, 2, 3]},
+                      "material": "grey", "transform": {"translate": [0, 0, 0]}},
+            "ball": {"sphere": {"center": [0, 0.5, 0], "radius": 0.5}, "material": "clay"},
+        },
+        "lights": {
+            "bulb": {"sphere": {"center": [1.5, 2, 1], "radius": 0.25}, "intensity": 30,
+                     "exposure": 1, "color": [1, F32(0.9), F32(0.8)]},
+            "sky": {"dome": {"rotation": 180}, "intensity": F32(0.2)},
+        },
+    }
+    usd = illum.load(tmp_path / "row.usda")
+    assert usd.warnings == [] and usd.resolution == (48, 32)
+    a, b = render(usd, integrator="full"), render(twin(d, tmp_path), integrator="full")
+    assert a.mean() > 0.01
+    assert np.array_equal(a, b)
+
+
+def test_light_units_are_usdlux_s(tmp_path):
+    """Each light's radiance as UsdLux defines it, computed here: color × intensity ×
+    2^exposure × blackbody (pxr's), over the world area when normalized; a distant light's
+    radiance L over its cone gives the irradiance L·π·sin²(angle/2) illum's sun takes."""
+    s = new_stage(tmp_path / "lights.usda")
+    camera(s, (0, 1, 6))
+    mesh(s, "/World/Wall", [(-4, -1, -1), (4, -1, -1), (4, 4, -1), (-4, 4, -1)], [4], [0, 1, 2, 3])
+    mesh(s, "/World/Floor", FLOOR, [4], [0, 1, 2, 3])
+    rect = UsdLux.RectLight.Define(s, "/Lights/Panel")
+    rect.CreateWidthAttr(2)
+    rect.CreateHeightAttr(0.5)
+    rect.CreateIntensityAttr(40)
+    rect.CreateExposureAttr(-0.5)
+    rect.CreateNormalizeAttr(True)
+    api = UsdGeom.XformCommonAPI(rect)
+    api.SetTranslate((-1, 2, 3))
+    api.SetScale((1.5, 1.5, 1.5))
+    disk = UsdLux.DiskLight.Define(s, "/Lights/Disk")
+    disk.CreateRadiusAttr(0.3)
+    disk.CreateIntensityAttr(25)
+    disk.CreateEnableColorTemperatureAttr(True)
+    disk.CreateColorTemperatureAttr(3200)
+    UsdGeom.XformCommonAPI(disk).SetTranslate((1.5, 1.5, 2))
+    sun = UsdLux.DistantLight.Define(s, "/Lights/Sun")
+    sun.CreateAngleAttr(2.0)
+    sun.CreateIntensityAttr(800)
+    s.Save()
+    bb = UsdLux.BlackbodyTemperatureAsRgb(3200)
+    rect_l = 40 * 2 ** -0.5 / (2 * 1.5 * 0.5 * 1.5)
+    sun_e = 800 * math.pi * math.sin(math.radians(2.0) / 2) ** 2
+    grey = {"diffuse": [F32(0.18)] * 3}
+    d = {
+        "camera": json_camera((0, 1, 6), (0, 1, 5)),
+        "materials": {"grey": grey},
+        "shapes": {
+            "wall": {"mesh": {"positions": [[-4, -1, -1], [4, -1, -1], [4, 4, -1], [-4, 4, -1]],
+                              "indices": [0, 1, 2, 0, 2, 3]}, "material": "grey"},
+            "floor": {"mesh": {"positions": FLOOR, "indices": [0, 1, 2, 0, 2, 3]},
+                      "material": "grey"},
+        },
+        "lights": {
+            "panel": {"rect": {"center": [-1, 2, 3], "normal": [0, 0, -1], "size": [3, 0.75],
+                               "up": [0, 1, 0]}, "intensity": rect_l},
+            "disk": {"disk": {"center": [1.5, 1.5, 2], "normal": [0, 0, -1], "radius": F32(0.3)},
+                     "intensity": 25, "color": [float(c) for c in bb]},
+            "sun": {"sun": {"direction": [0, 0, 1], "angular_diameter": 2.0}, "intensity": sun_e},
+        },
+    }
+    a = render(illum.load(tmp_path / "lights.usda"), spp=8)
+    b = render(twin(d, tmp_path), spp=8)
+    assert a.mean() > 0.01
+    # The blackbody colour is float32 in pxr, float64 here: the same to ~1e-7.
+    np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-7)
+
+
+def test_the_blackbody_colour_is_pxr_s(tmp_path):
+    for kelvin in [1000, 2000, 3333, 4500, 6500, 8200, 10000, 12000]:
+        s = new_stage(tmp_path / f"bb{kelvin}.usda")
+        camera(s, (0, 0, 0), size=(4, 4))
+        dome = UsdLux.DomeLight.Define(s, "/Sky")
+        dome.CreateEnableColorTemperatureAttr(True)
+        dome.CreateColorTemperatureAttr(kelvin)
+        s.Save()
+        # The camera sees the constant dome: every sample is its radiance.
+        px = render(illum.load(tmp_path / f"bb{kelvin}.usda"), spp=1)
+        want = np.array(UsdLux.BlackbodyTemperatureAsRgb(kelvin), dtype=np.float32)
+        np.testing.assert_allclose(px.reshape(-1, 3), np.tile(want, (16, 1)), rtol=2e-6)
+
+
+def test_transforms_compose_as_pxr_composes_them(tmp_path):
+    s = new_stage(tmp_path / "xf.usda")
+    camera(s, (0, 1.5, 7))
+    top = UsdGeom.Xform.Define(s, "/World")
+    top.AddTranslateOp().Set((0.3, 0.1, -0.2))
+    top.AddRotateXYZOp().Set((5, 20, -10))
+    top.AddScaleOp().Set((1.2, 1.2, 1.2))
+    mid = UsdGeom.Xform.Define(s, "/World/Group")
+    mid.AddOrientOp().Set(Gf.Quatf(0.9238795, 0, 0.3826834, 0))
+    mid.AddTranslateOp(opSuffix="pivot").Set((0.5, 0, 0))
+    mid.AddRotateZOp().Set(15)
+    mid.AddTranslateOp(opSuffix="pivot", isInverseOp=True)
+    ball = UsdGeom.Sphere.Define(s, "/World/Group/Ball")
+    ball.CreateRadiusAttr(0.4)
+    ball.AddTransformOp().Set(Gf.Matrix4d().SetTranslate(Gf.Vec3d(0.2, 0.6, 0.1)))
+    box = UsdGeom.Cube.Define(s, "/World/Group/Box")
+    box.AddTranslateOp().Set((-1, 0.5, 0))
+    box.AddRotateYXZOp().Set((30, 10, 45))
+    box.AddScaleOp().Set((0.5, 1.0, 0.3))
+    free = UsdGeom.Sphere.Define(s, "/World/Group/Free")
+    free.CreateRadiusAttr(0.3)
+    UsdGeom.Xformable(free).SetResetXformStack(True)
+    free.AddTranslateOp().Set((1.5, 0.3, 0.5))
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+
+    def world(prim):
+        m = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+        return np.array(m, dtype=np.float64).T  # row vectors -> column vectors
+
+    def sphere(prim, r):
+        m = world(prim)
+        return {"center": list(m[:3, 3]), "radius": r * float(np.linalg.norm(m[:3, 0]))}
+
+    d = {
+        "camera": json_camera((0, 1.5, 7), (0, 1.5, 6)),
+        "materials": {"grey": {"diffuse": [F32(0.18)] * 3}},
+        "shapes": {
+            "ball": {"sphere": sphere(ball.GetPrim(), 0.4), "material": "grey"},
+            "box": {"mesh": cube_mesh(2.0), "material": "grey",
+                    "transform": {"matrix": list(world(box.GetPrim()).reshape(-1))}},
+            "free": {"sphere": sphere(free.GetPrim(), 0.3), "material": "grey"},
+        },
+        "lights": {"sky": {"dome": {"rotation": 180}}},
+    }
+    a = render(illum.load(tmp_path / "xf.usda"), spp=4)
+    b = render(twin(d, tmp_path), spp=4)
+    assert a.mean() > 0.01
+    np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6)
+
+
+def cube_mesh(size):
+    """A cube of edge `size` about the origin, one quad (2 triangles) per face, outward."""
+    h = size / 2
+    positions, normals, indices = [], [], []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            n = np.eye(3)[axis] * sign
+            u = np.eye(3)[(axis + 1) % 3] * sign
+            v = np.cross(n, u)
+            base = len(positions)
+            for a, b in [(-1, -1), (1, -1), (1, 1), (-1, 1)]:
+                positions.append(list((n + u * a + v * b) * h))
+                normals.append(list(n))
+            indices += [base + i for i in (0, 1, 2, 0, 2, 3)]
+    return {"positions": positions, "normals": normals, "indices": indices}
+
+
+def test_z_up_stages_render_as_authored(tmp_path):
+    def build(up):
+        # Z-up coordinates of a Y-up point (x, y, z) are (x, -z, y).
+        p = (lambda x, y, z: (x, y, z)) if up == "Y" else (lambda x, y, z: (x, -z, y))
+        s = new_stage(tmp_path / f"up{up}.usda", up)
+        camera(s, p(0, 1, 6), rotate=(0, 0, 0) if up == "Y" else (90, 0, 0))
+        mesh(s, "/World/Floor", [p(*q) for q in FLOOR], [4], [0, 1, 2, 3])
+        ball = UsdGeom.Sphere.Define(s, "/World/Ball")
+        ball.CreateRadiusAttr(0.6)
+        UsdGeom.XformCommonAPI(ball).SetTranslate(p(0.4, 0.6, 0))
+        key = UsdLux.SphereLight.Define(s, "/Lights/Key")
+        key.CreateIntensityAttr(40)
+        key.CreateRadiusAttr(0.3)
+        UsdGeom.XformCommonAPI(key).SetTranslate(p(-1.5, 2.5, 1.5))
+        sun = UsdLux.DistantLight.Define(s, "/Lights/Sun")
+        sun.CreateIntensityAttr(2000)
+        # The sun turned in Y-up coordinates, then carried into Z-up ones (row vectors).
+        turn = Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(1, 0, 0), -60)) * \
+            Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(0, 1, 0), 30))
+        to_z = Gf.Matrix4d().SetRotate(Gf.Rotation(Gf.Vec3d(1, 0, 0), 90))
+        sun.AddTransformOp().Set(turn if up == "Y" else turn * to_z)
+        s.Save()
+        return illum.load(tmp_path / f"up{up}.usda")
+
+    y, z = build("Y"), build("Z")
+    assert z.warnings == []
+    a, b = render(y, spp=8), render(z, spp=8)
+    assert a.mean() > 0.01
+    np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6)
+
+
+def test_the_dome_is_oriented_as_openexr_lays_out_lat_long_maps(tmp_path):
+    """OpenEXR's lat-long map (UsdLux's): its left half (longitude π to 0) covers +X, its right
+    half -X. A camera looking along +X sees the left half's colour, and a dome turned 90° about
+    +Y carries it to -Z."""
+    w, h = 64, 32
+    px = np.zeros((h, w, 3), dtype=np.float32)
+    px[:, : w // 2] = (1, 0, 0)
+    px[:, w // 2:] = (0, 1, 0)
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                      {"RGB": px}) as f:
+        f.write(str(tmp_path / "halves.exr"))
+
+    def look(rotate_cam, rotate_dome):
+        s = new_stage(tmp_path / "dome.usda")
+        camera(s, (0, 0, 0), size=(4, 4), rotate=rotate_cam, focal=100)
+        dome = UsdLux.DomeLight.Define(s, "/Sky")
+        dome.CreateTextureFileAttr("halves.exr")
+        if rotate_dome:
+            UsdGeom.XformCommonAPI(dome).SetRotate((0, rotate_dome, 0))
+        s.Save()
+        return render(illum.load(tmp_path / "dome.usda"), spp=1).mean(axis=(0, 1))
+
+    plus_x, minus_x = (0, -90, 0), (0, 90, 0)
+    assert look(plus_x, 0)[0] > 0.99 and look(plus_x, 0)[1] < 0.01
+    assert look(minus_x, 0)[1] > 0.99 and look(minus_x, 0)[0] < 0.01
+    # Turned 90° about +Y, +X goes to -Z: the camera's default view (-Z) sees red.
+    assert look((0, 0, 0), 90)[0] > 0.99
+    assert look((0, 180, 0), 90)[1] > 0.99
+
+
+def test_references_variants_and_instances_compose(tmp_path):
+    asset = new_stage(tmp_path / "ball.usda")
+    root = UsdGeom.Xform.Define(asset, "/Ball")
+    asset.SetDefaultPrim(root.GetPrim())
+    ball = UsdGeom.Sphere.Define(asset, "/Ball/Geom")
+    ball.CreateRadiusAttr(0.5)
+    vset = root.GetPrim().GetVariantSets().AddVariantSet("paint")
+    for name, rgb in [("red", (0.8, 0.1, 0.1)), ("blue", (0.1, 0.2, 0.8))]:
+        vset.AddVariant(name)
+        vset.SetVariantSelection(name)
+        with vset.GetVariantEditContext():
+            ball.CreateDisplayColorAttr([rgb])
+    vset.SetVariantSelection("red")
+    asset.Save()
+
+    s = new_stage(tmp_path / "shot.usda")
+    camera(s, (0, 0.5, 6))
+    placed = []
+    for i, (x, paint, instanced) in enumerate([(-1.2, None, False), (0, "blue", False),
+                                               (1.2, "blue", True)]):
+        p = UsdGeom.Xform.Define(s, f"/World/Ball{i}")
+        p.GetPrim().GetReferences().AddReference("ball.usda")
+        if paint:
+            p.GetPrim().GetVariantSets().GetVariantSet("paint").SetVariantSelection(paint)
+        p.GetPrim().SetInstanceable(instanced)
+        UsdGeom.XformCommonAPI(p).SetTranslate((x, 0.5, 0))
+        placed.append((x, paint or "red"))
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+    rgb = {"red": [F32(c) for c in (0.8, 0.1, 0.1)], "blue": [F32(c) for c in (0.1, 0.2, 0.8)]}
+    d = {
+        "camera": json_camera((0, 0.5, 6), (0, 0.5, 5)),
+        "materials": {k: {"diffuse": v} for k, v in rgb.items()},
+        "shapes": {f"b{i}": {"sphere": {"center": [x, 0.5, 0], "radius": 0.5}, "material": paint}
+                   for i, (x, paint) in enumerate(placed)},
+        "lights": {"sky": {"dome": {"rotation": 180}}},
+    }
+    a = render(illum.load(tmp_path / "shot.usda"))
+    b = render(twin(d, tmp_path))
+    assert np.array_equal(a, b)
+
+
+def bad_stage(tmp_path, build):
+    path = tmp_path / f"{build.__name__}.usda"
+    s = new_stage(path)
+    camera(s, (0, 1, 6))
+    UsdLux.DomeLight.Define(s, "/Sky")
+    build(s)
+    s.Save()
+    with pytest.raises(illum.IllumError) as e:
+        illum.load(path)
+    p = cli("render", path, "-o", tmp_path / "x.exr", "--quiet")
+    assert p.returncode != 0
+    assert p.stderr.strip().splitlines()[-1] == f"illum: error: {e.value}"
+    return str(e.value)
+
+
+def test_bad_stages_get_errors_naming_the_prim(tmp_path):
+    def bad_indices(s):
+        mesh(s, "/World/Bad", FLOOR, [4], [0, 1, 2, 7])
+    e = bad_stage(tmp_path, bad_indices)
+    assert "/World/Bad.faceVertexIndices" in e and "got 7" in e, e
+
+    def bad_counts(s):
+        mesh(s, "/World/Bad", FLOOR, [4, 3], [0, 1, 2, 3])
+    e = bad_stage(tmp_path, bad_counts)
+    assert "/World/Bad.faceVertexIndices" in e and "adds up to 7" in e, e
+
+    def non_finite(s):
+        b = UsdGeom.Sphere.Define(s, "/World/Ball")
+        b.AddTranslateOp().Set((0, float("inf"), 0))
+    e = bad_stage(tmp_path, non_finite)
+    assert "/World/Ball.xformOp:translate" in e and "finite" in e, e
+
+    def missing_reference(s):
+        s.DefinePrim("/World/Prop").GetReferences().AddReference("nowhere.usda")
+    e = bad_stage(tmp_path, missing_reference)
+    assert "nowhere.usda" in e and "/World/Prop" in e, e
+
+    (tmp_path / "loop.usda").write_text('#usda 1.0\n(defaultPrim = "A")\n'
+                                        'def "A" (references = @./cycle.usda@</World/Loop>) {}\n')
+
+    def cycle(s):
+        s.DefinePrim("/World/Loop").GetReferences().AddReference("loop.usda")
+    e = bad_stage(tmp_path, cycle)
+    assert "cycle" in e, e
+
+    def opacity(s):
+        b = UsdGeom.Sphere.Define(s, "/World/Glass")
+        bind(b, preview(s, "/Looks/Glass", opacity=0.5))
+    e = bad_stage(tmp_path, opacity)
+    assert "/Looks/Glass/Surface.inputs:opacity" in e, e
+
+
+def test_what_is_not_rendered_is_listed_and_strict_refuses_it(tmp_path):
+    s = new_stage(tmp_path / "warn.usda")
+    camera(s, (0, 1, 6))
+    UsdGeom.Cylinder.Define(s, "/World/Can")
+    key = UsdLux.SphereLight.Define(s, "/Lights/Spot")
+    UsdLux.ShapingAPI.Apply(key.GetPrim()).CreateShapingConeAngleAttr(30)
+    s.Save()
+    path = tmp_path / "warn.usda"
+    w = illum.load(path).warnings
+    assert any(x.startswith("/World/Can: Cylinder is not rendered") for x in w), w
+    assert any(x.startswith("/Lights/Spot.inputs:shaping:cone:angle:") for x in w), w
+    p = cli("render", path, "-o", tmp_path / "x.exr", "--spp", 1, "--quiet")
+    assert p.returncode == 0 and "/World/Can: Cylinder is not rendered" in p.stderr, p.stderr
+    p = cli("render", path, "-o", tmp_path / "y.exr", "--spp", 1, "--strict")
+    assert p.returncode != 0 and "--strict: 2 warning(s)" in p.stderr, p.stderr
+    assert not (tmp_path / "y.exr").exists()
+
+
+def test_usdc_and_usdz_read_as_usda(tmp_path):
+    s = new_stage(tmp_path / "row.usda")
+    camera(s, (0, 1, 6))
+    mesh(s, "/World/Floor", FLOOR, [4], [0, 1, 2, 3])
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+    s.Export(str(tmp_path / "row.usdc"))
+    from pxr import UsdUtils
+    assert UsdUtils.CreateNewUsdzPackage(str(tmp_path / "row.usdc"), str(tmp_path / "row.usdz"))
+    a = render(illum.load(tmp_path / "row.usda"))
+    for ext in ["usdc", "usdz"]:
+        assert np.array_equal(render(illum.load(tmp_path / f"row.{ext}")), a), ext
+
+
+def test_the_lookdev_stage_loads_without_warnings():
+    root = __import__("pathlib").Path(__file__).resolve().parents[2]
+    s = illum.load(root / "scenes" / "lookdev.usda")
+    assert s.warnings == [] and s.resolution == (768, 384)
+    stage = Usd.Stage.Open(str(root / "scenes" / "lookdev.usda"))
+    cam = UsdGeom.Camera(stage.GetPrimAtPath("/World/Camera")).GetCamera()
+    # pxr's field of view of the camera equals the JSON row's (scenes/default.json: 27°).
+    assert cam.GetFieldOfView(Gf.Camera.FOVVertical) == pytest.approx(27, abs=1e-4)
+    r = s.render(spp=2, width=64)
+    assert r.beauty.mean() > 0.05

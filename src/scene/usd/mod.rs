@@ -1,0 +1,353 @@
+//! USD stages (.usda, .usdc, .usdz) as scenes, read through the `openusd` crate, which composes
+//! them (sublayers, references, payloads, variants, inherits, instancing). The composed stage is
+//! turned into the scene format's own structures (`format::SceneFile`), which are then built and
+//! validated exactly as a JSON scene is; docs/scene-format.md ("USD stages") gives the mapping of
+//! each schema. What illum cannot render as authored is an error naming the prim and attribute,
+//! or, where the rest of the image stays right, a warning in `Scene::warnings`.
+
+mod camera;
+mod geom;
+mod lux;
+mod shade;
+mod value;
+mod xform;
+
+use super::error::{SceneError, io_message};
+use super::format::{CameraDef, NamedMap, SceneFile};
+use glam::DMat4;
+use openusd::sdf::{self, Value};
+use openusd::usd;
+use std::collections::HashMap;
+use std::path::Path;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// The file extensions read as USD.
+pub(crate) const EXTENSIONS: &[&str] = &["usd", "usda", "usdc", "usdz"];
+
+/// Whether `path` names a USD stage (by its extension).
+pub(crate) fn is_usd(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| EXTENSIONS.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
+/// The composed stage being converted, and what it has given so far.
+pub(crate) struct Reader {
+    stage: usd::Stage,
+    /// The stage's file as the user named it, for messages.
+    file: String,
+    warnings: Vec<String>,
+    /// Z-up stages are turned into illum's Y-up frame by a rotation of the whole scene (camera
+    /// included), which leaves the image as authored.
+    to_y_up: DMat4,
+    z_up: bool,
+    /// World transforms of the prims visited, by path (parents come before children).
+    world: HashMap<sdf::Path, DMat4>,
+    /// Prims whose subtree is left out (invisible, guide or proxy purpose, materials, ...).
+    pruned: Vec<sdf::Path>,
+    out: SceneFile,
+    /// illum material names by (bound material or display colour, two-sided emission).
+    materials: HashMap<String, String>,
+    cameras: Vec<sdf::Path>,
+    render_settings: Vec<sdf::Path>,
+}
+
+/// Reads the stage at `path` into scene-file structures, with the warnings it gives.
+pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
+    let file = path.display().to_string();
+    // openusd's own message for a missing file names no cause; say it as every loader does.
+    std::fs::metadata(path).map_err(|e| SceneError::Io {
+        file: file.clone(),
+        message: io_message(&e),
+    })?;
+    let Some(p) = path.to_str() else {
+        return Err(SceneError::unsupported(
+            &file,
+            "(stage)",
+            "the path is not UTF-8 (openusd opens UTF-8 paths only)",
+        ));
+    };
+    let stage = usd::Stage::open(p).map_err(|e| {
+        SceneError::unsupported(&file, "(stage)", format!("cannot open the stage: {e:#}"))
+    })?;
+    let mut r = Reader {
+        stage,
+        file,
+        warnings: Vec::new(),
+        to_y_up: DMat4::IDENTITY,
+        z_up: false,
+        world: HashMap::new(),
+        pruned: Vec::new(),
+        out: SceneFile {
+            _schema: None,
+            description: None,
+            camera: CameraDef {
+                position: None,
+                look_at: None,
+                up: None,
+                fov_y: None,
+                gltf: None,
+                index: None,
+                resolution: [0, 0],
+            },
+            textures: NamedMap::default(),
+            materials: NamedMap::default(),
+            shapes: NamedMap::default(),
+            lights: NamedMap::default(),
+            integrator: None,
+        },
+        materials: HashMap::new(),
+        cameras: Vec::new(),
+        render_settings: Vec::new(),
+    };
+    r.stage_metadata()?;
+    r.traverse()?;
+    // Prims compose as they are visited: their errors are known after the traversal.
+    let errors = r.stage.composition_errors();
+    if let Some(e) = errors.first() {
+        return Err(SceneError::unsupported(
+            &r.file,
+            "(composition)",
+            format!(
+                "{e}{}",
+                match errors.len() {
+                    1 => String::new(),
+                    n => format!(" (and {} more composition errors)", n - 1),
+                }
+            ),
+        ));
+    }
+    r.out.camera = r.camera()?;
+    Ok((r.out, r.warnings))
+}
+
+impl Reader {
+    /// `prim.attr` as a field name in messages.
+    fn field(prim: &sdf::Path, attr: &str) -> String {
+        if attr.is_empty() {
+            prim.as_str().to_string()
+        } else {
+            format!("{}.{attr}", prim.as_str())
+        }
+    }
+
+    fn invalid(
+        &self,
+        prim: &sdf::Path,
+        attr: &str,
+        value: impl ToString,
+        reason: &str,
+    ) -> SceneError {
+        SceneError::Invalid {
+            file: self.file.clone(),
+            field: Self::field(prim, attr),
+            value: value.to_string(),
+            reason: reason.to_string(),
+        }
+    }
+
+    fn unsupported(&self, prim: &sdf::Path, attr: &str, message: impl Into<String>) -> SceneError {
+        SceneError::unsupported(&self.file, Self::field(prim, attr), message)
+    }
+
+    fn warn(&mut self, prim: &sdf::Path, attr: &str, message: impl AsRef<str>) {
+        self.warnings
+            .push(format!("{}: {}", Self::field(prim, attr), message.as_ref()));
+    }
+
+    /// A library failure reading `prim.attr`, as an error naming them.
+    fn read_error(&self, prim: &sdf::Path, attr: &str, e: impl std::fmt::Display) -> SceneError {
+        self.unsupported(prim, attr, format!("cannot read: {e}"))
+    }
+
+    /// The composed value of `prim.attr`: its default, else (an animated attribute) its first
+    /// time sample, with a warning that the stage is rendered at that time.
+    fn attr(&mut self, prim: &sdf::Path, attr: &str) -> Result<Option<Value>> {
+        let path = prim
+            .append_property(attr)
+            .map_err(|e| self.read_error(prim, attr, e))?;
+        let a = self.stage.attribute(path);
+        if let Some(v) = a
+            .get::<Value>()
+            .map_err(|e| self.read_error(prim, attr, e))?
+        {
+            return Ok(Some(v));
+        }
+        let times = a
+            .time_sample_times()
+            .map_err(|e| self.read_error(prim, attr, e))?;
+        let Some(&t) = times.first() else {
+            return Ok(None);
+        };
+        let v = a
+            .get_at::<Value>(usd::TimeCode::new(t))
+            .map_err(|e| self.read_error(prim, attr, e))?;
+        self.warn(
+            prim,
+            attr,
+            format!("animated: rendered at its first time sample ({t})"),
+        );
+        Ok(v)
+    }
+
+    /// A number attribute, or `fallback` when it is not authored.
+    fn number(&mut self, prim: &sdf::Path, attr: &str, fallback: f64) -> Result<f64> {
+        match self.attr(prim, attr)? {
+            None => Ok(fallback),
+            Some(v) => match value::scalar(&v) {
+                Some(x) if x.is_finite() => Ok(x),
+                Some(x) => Err(self.invalid(prim, attr, x, "must be finite")),
+                None => Err(self.invalid(prim, attr, value::show(&v), "expected a number")),
+            },
+        }
+    }
+
+    fn color(&mut self, prim: &sdf::Path, attr: &str, fallback: [f64; 3]) -> Result<[f64; 3]> {
+        match self.attr(prim, attr)? {
+            None => Ok(fallback),
+            Some(v) => match value::vec3(&v) {
+                Some(c) if c.iter().all(|x| x.is_finite()) => Ok(c),
+                Some(c) => Err(self.invalid(prim, attr, format!("{c:?}"), "must be finite")),
+                None => Err(self.invalid(prim, attr, value::show(&v), "expected 3 numbers")),
+            },
+        }
+    }
+
+    fn boolean(&mut self, prim: &sdf::Path, attr: &str, fallback: bool) -> Result<bool> {
+        match self.attr(prim, attr)? {
+            None => Ok(fallback),
+            Some(v) => value::boolean(&v)
+                .ok_or_else(|| self.invalid(prim, attr, value::show(&v), "expected a bool")),
+        }
+    }
+
+    fn token(&mut self, prim: &sdf::Path, attr: &str, fallback: &str) -> Result<String> {
+        match self.attr(prim, attr)? {
+            None => Ok(fallback.to_string()),
+            Some(v) => value::token(&v)
+                .map(str::to_string)
+                .ok_or_else(|| self.invalid(prim, attr, value::show(&v), "expected a token")),
+        }
+    }
+
+    /// Whether `prim.attr` has an opinion (a default or time samples).
+    fn authored(&mut self, prim: &sdf::Path, attr: &str) -> Result<bool> {
+        Ok(self.attr(prim, attr)?.is_some())
+    }
+
+    /// upAxis (Y or Z) and metersPerUnit (read for the record: radiance is per unit area of
+    /// whatever unit the stage is in, so it does not change the image).
+    fn stage_metadata(&mut self) -> Result<()> {
+        let root = sdf::Path::abs_root();
+        let up = self
+            .stage
+            .stage_metadata("upAxis")
+            .map_err(|e| self.read_error(&root, "upAxis", e))?;
+        match up.as_ref().and_then(value::token) {
+            None | Some("Y") => {}
+            Some("Z") => {
+                self.z_up = true;
+                // +Z up becomes +Y up, +Y becomes -Z: a rotation of -90° about X.
+                self.to_y_up = DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2);
+            }
+            Some(other) => {
+                return Err(self.invalid(&root, "upAxis", other, "expected \"Y\" or \"Z\""));
+            }
+        }
+        let mpu = self
+            .stage
+            .stage_metadata("metersPerUnit")
+            .map_err(|e| self.read_error(&root, "metersPerUnit", e))?;
+        if let Some(m) = mpu.as_ref().and_then(value::scalar)
+            && !(m.is_finite() && m > 0.0)
+        {
+            return Err(self.invalid(&root, "metersPerUnit", m, "must be a positive number"));
+        }
+        Ok(())
+    }
+
+    /// Visits every active, defined, non-abstract prim (instance proxies included), parents
+    /// first, and converts what it holds.
+    fn traverse(&mut self) -> Result<()> {
+        let mut paths = Vec::new();
+        let root = sdf::Path::abs_root();
+        self.stage
+            .traverse(usd::PrimPredicate::DEFAULT_PROXIES, |p| {
+                paths.push(p.clone())
+            })
+            .map_err(|e| self.read_error(&root, "", e))?;
+        for path in paths {
+            if self.pruned.iter().any(|p| path.has_prefix(p)) {
+                continue;
+            }
+            self.prim(&path)?;
+        }
+        Ok(())
+    }
+
+    fn prim(&mut self, path: &sdf::Path) -> Result<()> {
+        let prim = self.stage.prim(path.clone());
+        let kind = prim
+            .type_name()
+            .map_err(|e| self.read_error(path, "", e))?
+            .map(|t| t.as_str().to_string())
+            .unwrap_or_default();
+        if matches!(
+            kind.as_str(),
+            "Material" | "Shader" | "NodeGraph" | "GeomSubset"
+        ) {
+            // Read through the bindings of the geometry that uses them.
+            self.pruned.push(path.clone());
+            return Ok(());
+        }
+        if self.token(path, "visibility", "inherited")? == "invisible" {
+            self.pruned.push(path.clone());
+            return Ok(());
+        }
+        let purpose = self.token(path, "purpose", "default")?;
+        if purpose == "guide" || purpose == "proxy" {
+            self.pruned.push(path.clone());
+            return Ok(());
+        }
+        let parent = path
+            .parent()
+            .and_then(|p| self.world.get(&p).copied())
+            .unwrap_or(self.to_y_up);
+        let (local, reset) = self.local_transform(path)?;
+        let world = if reset { self.to_y_up } else { parent } * local;
+        self.world.insert(path.clone(), world);
+        match kind.as_str() {
+            "Mesh" => self.mesh(path, world)?,
+            "Sphere" => self.sphere(path, world)?,
+            "Cube" => self.cube(path, world)?,
+            "Plane" => self.plane(path, world)?,
+            "RectLight" | "DiskLight" | "SphereLight" | "DistantLight" | "DomeLight"
+            | "DomeLight_1" => self.light(path, &kind, world)?,
+            "Camera" => self.cameras.push(path.clone()),
+            "RenderSettings" => self.render_settings.push(path.clone()),
+            "PointInstancer" => {
+                self.warn(
+                    path,
+                    "",
+                    "PointInstancer is not read yet: its instances are not rendered",
+                );
+                self.pruned.push(path.clone());
+            }
+            "Cylinder" | "Cone" | "Capsule" | "Cylinder_1" | "Capsule_1" | "Points"
+            | "BasisCurves" | "NurbsCurves" | "HermiteCurves" | "NurbsPatch" | "TetMesh"
+            | "Volume" => self.warn(
+                path,
+                "",
+                format!("{kind} is not rendered (illum has no exact {kind}; author it as a Mesh)"),
+            ),
+            "CylinderLight" | "GeometryLight" | "PortalLight" | "PluginLight" => self.warn(
+                path,
+                "",
+                format!("{kind} is not supported: the light is left out"),
+            ),
+            _ => {}
+        }
+        Ok(())
+    }
+}
