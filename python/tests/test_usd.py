@@ -465,3 +465,55 @@ def test_the_lookdev_stage_loads_without_warnings():
     assert cam.GetFieldOfView(Gf.Camera.FOVVertical) == pytest.approx(27, abs=1e-4)
     r = s.render(spp=2, width=64)
     assert r.beauty.mean() > 0.05
+
+
+def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path):
+    """USD's st has (0, 0) at the image's bottom left: a quad whose st spans [0, 1]² shows the
+    image upright. Its JSON twin has illum's top-left uvs."""
+    px = np.zeros((8, 8, 3), dtype=np.float32)
+    px[:4] = (0.9, 0.05, 0.05)  # top half red
+    px[4:] = (0.05, 0.9, 0.05)  # bottom half green
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                      {"RGB": px}) as f:
+        f.write(str(tmp_path / "halves.exr"))
+    s = new_stage(tmp_path / "tex.usda")
+    camera(s, (0, 0, 4), size=(32, 32))
+    quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+    m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
+    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                              UsdGeom.Tokens.faceVarying)
+    st.Set([(0, 0), (1, 0), (1, 1), (0, 1)])
+    mat = UsdShade.Material.Define(s, "/Looks/Card")
+    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
+    ps.CreateIdAttr("UsdPreviewSurface")
+    tex = UsdShade.Shader.Define(s, "/Looks/Card/Image")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("halves.exr")
+    tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("clamp")
+    tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("clamp")
+    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+        reader.ConnectableAPI(), "result")
+    ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        tex.ConnectableAPI(), "rgb")
+    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
+    bind(m, mat)
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+    d = {
+        "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
+        "textures": {"halves": {"file": "halves.exr", "wrap": "clamp"}},
+        "materials": {"card": {**ggx((1, 1, 1), 0.5), "diffuse_texture": "halves"}},
+        "shapes": {"card": {"mesh": {"positions": [list(p) for p in quad],
+                                     "indices": [0, 1, 2, 0, 2, 3],
+                                     "uvs": [[0, 1], [1, 1], [1, 0], [0, 0]]},
+                            "material": "card"}},
+        "lights": {"sky": {"dome": {"rotation": 180}}},
+    }
+    a = render(illum.load(tmp_path / "tex.usda"))
+    b = render(twin(d, tmp_path))
+    assert np.array_equal(a, b)
+    top, bottom = a[12, 16], a[20, 16]
+    assert top[0] > 3 * top[1] and bottom[1] > 3 * bottom[0], (top, bottom)
