@@ -517,3 +517,45 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path):
     assert np.array_equal(a, b)
     top, bottom = a[12, 16], a[20, 16]
     assert top[0] > 3 * top[1] and bottom[1] > 3 * bottom[0], (top, bottom)
+
+
+BOX_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),
+              (-0.5, 1, -0.5), (0.5, 1, -0.5), (0.5, 1, 0.5), (-0.5, 1, 0.5)]
+BOX_FACES = [0, 1, 2, 3, 4, 7, 6, 5, 0, 4, 5, 1, 1, 5, 6, 2, 2, 6, 7, 3, 3, 7, 4, 0]
+
+
+def test_instances_share_their_prototype_s_mesh(tmp_path):
+    asset = new_stage(tmp_path / "box.usda")
+    root = UsdGeom.Xform.Define(asset, "/Box")
+    asset.SetDefaultPrim(root.GetPrim())
+    mesh(asset, "/Box/Geom", BOX_POINTS, [4] * 6, BOX_FACES)
+    asset.Save()
+    s = new_stage(tmp_path / "boxes.usda")
+    camera(s, (0, 1, 6))
+    xs = [-1.5, 0.0, 1.5]
+    for i, x in enumerate(xs):
+        p = UsdGeom.Xform.Define(s, f"/World/Box{i}")
+        p.GetPrim().GetReferences().AddReference("box.usda")
+        p.GetPrim().SetInstanceable(True)
+        UsdGeom.XformCommonAPI(p).SetTranslate((x, 0, 0))
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+    # The quads as fans (v0, v1, v2), (v0, v2, v3).
+    tris = [q[k] for q in (BOX_FACES[i:i + 4] for i in range(0, 24, 4))
+            for k in (0, 1, 2, 0, 2, 3)]
+    shapes = {"b0": {"mesh": {"positions": [list(p) for p in BOX_POINTS], "indices": tris},
+                     "material": "grey", "transform": {"translate": [xs[0], 0, 0]}}}
+    for i, x in enumerate(xs[1:], 1):
+        shapes[f"b{i}"] = {"instance": "b0", "transform": {"translate": [x, 0, 0]}}
+    d = {
+        "camera": json_camera((0, 1, 6), (0, 1, 5)),
+        "materials": {"grey": {"diffuse": [F32(0.18)] * 3}},
+        "shapes": shapes,
+        "lights": {"sky": {"dome": {"rotation": 180}}},
+    }
+    a = render(illum.load(tmp_path / "boxes.usda"))
+    assert a.mean() > 0.01
+    assert np.array_equal(a, render(twin(d, tmp_path)))
+    # One mesh of 12 triangles, placed three times: the trace structure says so.
+    p = cli("render", tmp_path / "boxes.usda", "-o", tmp_path / "b.exr", "--spp", 1)
+    assert p.returncode == 0 and "(12 triangles;" in p.stderr, p.stderr

@@ -208,7 +208,7 @@ pub fn default_fresnel() -> FresnelDef {
     FresnelDef::Schlick([0.04; 3])
 }
 
-/// A shape: exactly one of `sphere`, `rect`, `disk`, `mesh`, `gltf`.
+/// A shape: exactly one of `sphere`, `rect`, `disk`, `mesh`, `gltf`, `instance`.
 #[derive(Debug, Default, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeDef {
@@ -217,6 +217,9 @@ pub struct ShapeDef {
     pub disk: Option<DiskDef>,
     pub mesh: Option<MeshDef>,
     pub gltf: Option<GltfDef>,
+    /// The name of an earlier mesh shape whose mesh (and material) this shape places again
+    /// with its own transform, without a copy.
+    pub instance: Option<String>,
     pub material: Option<String>,
     pub transform: Option<TransformDef>,
     /// Spheres only: the axis of the anisotropic tangent's latitudes.

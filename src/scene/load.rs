@@ -126,6 +126,7 @@ pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<S
         texture_ids: IndexMap::new(),
         material_ids: IndexMap::new(),
         gltf_cameras: HashMap::new(),
+        mesh_ids: HashMap::new(),
     };
     for (name, def) in &file.textures.0 {
         let tex = b.texture(name, def)?;
@@ -214,6 +215,8 @@ pub(crate) struct Builder<'a> {
     pub material_ids: IndexMap<String, MaterialId>,
     /// Cameras of each glTF shape, by shape name.
     pub gltf_cameras: HashMap<String, Vec<GltfCamera>>,
+    /// The mesh of each mesh shape, by shape name (what `instance` shapes place again).
+    pub mesh_ids: HashMap<String, u32>,
 }
 
 /// "exactly one of" check for shapes and lights; returns the key given.
@@ -418,11 +421,19 @@ impl Builder<'_> {
                 ("disk", def.disk.is_some()),
                 ("mesh", def.mesh.is_some()),
                 ("gltf", def.gltf.is_some()),
+                ("instance", def.instance.is_some()),
             ],
         )?;
         let material = match &def.material {
+            Some(_) if kind == "instance" => {
+                return Err(SceneError::unsupported(
+                    ctx.file,
+                    format!("{f}.material"),
+                    "an instance takes the material of the shape it places again",
+                ));
+            }
             Some(m) => Some(self.material_ref(&format!("{f}.material"), m)?),
-            None if kind == "gltf" => None,
+            None if kind == "gltf" || kind == "instance" => None,
             None => {
                 return Err(SceneError::unsupported(
                     ctx.file,
@@ -432,13 +443,13 @@ impl Builder<'_> {
             }
         };
         let transform = match &def.transform {
-            Some(_) if !matches!(kind, "mesh" | "gltf") => {
+            Some(_) if !matches!(kind, "mesh" | "gltf" | "instance") => {
                 return Err(SceneError::unsupported(
                     ctx.file,
                     format!("{f}.transform"),
                     format!(
                         "{kind} shapes take no transform (analytic shapes are given in world \
-                         space; only mesh and gltf shapes have one)"
+                         space; only mesh, gltf and instance shapes have one)"
                     ),
                 ));
             }
@@ -481,12 +492,27 @@ impl Builder<'_> {
             }));
         } else if let Some(m) = &def.mesh {
             let mesh = self.mesh(&format!("{f}.mesh"), name, m, material.unwrap_or_default())?;
+            let id = self.parts.meshes.len() as u32;
             self.parts.instances.push(MeshInstance {
-                mesh: self.parts.meshes.len() as u32,
+                mesh: id,
                 transform,
                 name: name.to_owned(),
             });
             self.parts.meshes.push(mesh);
+            self.mesh_ids.insert(name.to_owned(), id);
+        } else if let Some(of) = &def.instance {
+            let Some(&mesh) = self.mesh_ids.get(of) else {
+                return Err(ctx.err(
+                    format!("{f}.instance"),
+                    quoted(of),
+                    "must name an earlier shape with a mesh",
+                ));
+            };
+            self.parts.instances.push(MeshInstance {
+                mesh,
+                transform,
+                name: name.to_owned(),
+            });
         } else if let Some(g) = &def.gltf {
             let cameras = gltf_load::load(
                 &gltf_load::Request {

@@ -118,6 +118,7 @@ pub enum Shape {
     Disk(DiskShape),
     Mesh(MeshShape),
     Gltf(GltfShape),
+    Instance(InstanceShape),
 }
 
 #[derive(JsonSchema)]
@@ -163,6 +164,15 @@ pub struct GltfShape {
     gltf: GltfDef,
     /// Material name; if given, replaces every material of the glTF file.
     material: Option<String>,
+    transform: Option<TransformDef>,
+}
+
+/// Another placement of an earlier mesh shape's mesh (and material), without a copy.
+#[derive(JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceShape {
+    /// Name of an earlier shape with a `mesh`.
+    instance: String,
     transform: Option<TransformDef>,
 }
 

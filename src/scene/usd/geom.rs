@@ -44,21 +44,67 @@ impl Reader {
         Ok(())
     }
 
-    fn mesh_shape(&mut self, prim: &sdf::Path, mesh: MeshDef, world: DMat4) -> Result<()> {
-        self.add_shape(
-            prim,
-            ShapeDef {
-                mesh: Some(mesh),
-                transform: Some(TransformDef {
-                    matrix: Some(row_major(world)),
-                    ..Default::default()
-                }),
+    /// A mesh shape placed by `world`. The prims of instances (instance proxies) share their
+    /// prototype's mesh: the first makes it (`build`), the others place it again (`instance`).
+    fn mesh_shape(
+        &mut self,
+        prim: &sdf::Path,
+        world: DMat4,
+        build: impl FnOnce(&mut Self) -> Result<Option<MeshDef>>,
+    ) -> Result<()> {
+        let double_sided = self.boolean(prim, "doubleSided", false)?;
+        let material = self.material(prim, double_sided)?;
+        let transform = Some(TransformDef {
+            matrix: Some(row_major(world)),
+            ..Default::default()
+        });
+        let key = self
+            .prototype_of(prim)?
+            .map(|p| format!("{}\n{material}", p.as_str()));
+        let name = prim.as_str().to_string();
+        if let Some(first) = key.as_ref().and_then(|k| self.instanced.get(k)) {
+            let shape = ShapeDef {
+                instance: Some(first.clone()),
+                transform,
                 ..Default::default()
-            },
-        )
+            };
+            self.out.shapes.0.insert(name, shape);
+            return Ok(());
+        }
+        let Some(mesh) = build(self)? else {
+            return Ok(());
+        };
+        let shape = ShapeDef {
+            mesh: Some(mesh),
+            material: Some(material),
+            transform,
+            ..Default::default()
+        };
+        self.out.shapes.0.insert(name.clone(), shape);
+        if let Some(k) = key {
+            self.instanced.insert(k, name);
+        }
+        Ok(())
+    }
+
+    /// The prim of the prototype that an instance proxy stands for.
+    fn prototype_of(&self, prim: &sdf::Path) -> Result<Option<sdf::Path>> {
+        let p = self.stage.prim(prim.clone());
+        let read = |e| self.read_error(prim, "", e);
+        if !p.is_instance_proxy().map_err(read)? {
+            return Ok(None);
+        }
+        Ok(p.prim_in_prototype()
+            .map_err(|e| self.read_error(prim, "", e))?
+            .map(|q| q.path().clone()))
     }
 
     pub(super) fn mesh(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
+        self.mesh_shape(prim, world, |r| r.read_mesh(prim))
+    }
+
+    /// A Mesh prim's triangles, or None (with a warning) when it has none.
+    fn read_mesh(&mut self, prim: &sdf::Path) -> Result<Option<MeshDef>> {
         let points = self.vec3s(prim, "points")?;
         let counts = self.ints(prim, "faceVertexCounts")?;
         let indices = self.ints(prim, "faceVertexIndices")?;
@@ -68,7 +114,7 @@ impl Reader {
                 "",
                 "a Mesh without points, faceVertexCounts and faceVertexIndices: nothing to render",
             );
-            return Ok(());
+            return Ok(None);
         };
         if let Some(p) = points.iter().find(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(self.invalid(prim, "points", format!("{p:?}"), "points must be finite"));
@@ -167,9 +213,9 @@ impl Reader {
         };
         if mesh.indices.as_ref().is_some_and(|i| i.is_empty()) {
             self.warn(prim, "", "a Mesh with no faces: nothing to render");
-            return Ok(());
+            return Ok(None);
         }
-        self.mesh_shape(prim, mesh, world)
+        Ok(Some(mesh))
     }
 
     fn vec3s(&mut self, prim: &sdf::Path, attr: &str) -> Result<Option<Vec<[f64; 3]>>> {
@@ -394,7 +440,7 @@ impl Reader {
             normals: Some(normals),
             ..Default::default()
         };
-        self.mesh_shape(prim, mesh, world)
+        self.mesh_shape(prim, world, |_| Ok(Some(mesh)))
     }
 
     /// A `width` × `length` rectangle facing +`axis`: 2 triangles.
@@ -424,6 +470,6 @@ impl Reader {
             normals: Some(vec![n.to_array(); 4]),
             ..Default::default()
         };
-        self.mesh_shape(prim, mesh, world)
+        self.mesh_shape(prim, world, |_| Ok(Some(mesh)))
     }
 }

@@ -49,6 +49,8 @@ pub(crate) struct Reader {
     out: SceneFile,
     /// illum material names by (bound material or display colour, two-sided emission).
     materials: HashMap<String, String>,
+    /// The shape that holds the mesh of each (prototype prim, material), for instances.
+    instanced: HashMap<String, String>,
     cameras: Vec<sdf::Path>,
     render_settings: Vec<sdf::Path>,
 }
@@ -98,6 +100,7 @@ pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
             integrator: None,
         },
         materials: HashMap::new(),
+        instanced: HashMap::new(),
         cameras: Vec::new(),
         render_settings: Vec::new(),
     };
