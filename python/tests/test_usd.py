@@ -559,3 +559,40 @@ def test_instances_share_their_prototype_s_mesh(tmp_path):
     # One mesh of 12 triangles, placed three times: the trace structure says so.
     p = cli("render", tmp_path / "boxes.usda", "-o", tmp_path / "b.exr", "--spp", 1)
     assert p.returncode == 0 and "(12 triangles;" in p.stderr, p.stderr
+
+
+def test_surfaces_behind_node_graphs_and_interface_inputs(tmp_path):
+    """A Material whose surface comes out of a NodeGraph, with the diffuse colour fed from the
+    material's interface input, reads as the same UsdPreviewSurface authored directly."""
+    def build(name, wrapped):
+        s = new_stage(tmp_path / f"{name}.usda")
+        camera(s, (0, 0.5, 4))
+        ball = UsdGeom.Sphere.Define(s, "/World/Ball")
+        ball.CreateRadiusAttr(0.5)
+        UsdGeom.XformCommonAPI(ball).SetTranslate((0, 0.5, 0))
+        mat = UsdShade.Material.Define(s, "/Looks/Paint")
+        if wrapped:
+            graph = UsdShade.NodeGraph.Define(s, "/Looks/Paint/Graph")
+            ps = UsdShade.Shader.Define(s, "/Looks/Paint/Graph/Surface")
+            ps.CreateIdAttr("UsdPreviewSurface")
+            color = mat.CreateInput("paint", Sdf.ValueTypeNames.Color3f)
+            color.Set((0.2, 0.5, 0.8))
+            ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(color)
+            ps.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.3)
+            out = graph.CreateOutput("surface", Sdf.ValueTypeNames.Token)
+            out.ConnectToSource(ps.ConnectableAPI(), "surface")
+            mat.CreateSurfaceOutput().ConnectToSource(out)
+        else:
+            ps = UsdShade.Shader.Define(s, "/Looks/Paint/Surface")
+            ps.CreateIdAttr("UsdPreviewSurface")
+            ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set((0.2, 0.5, 0.8))
+            ps.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.3)
+            mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
+        bind(ball, mat)
+        UsdLux.DomeLight.Define(s, "/Sky")
+        s.Save()
+        return illum.load(tmp_path / f"{name}.usda")
+
+    wrapped, direct = build("wrapped", True), build("direct", False)
+    assert wrapped.warnings == []
+    assert np.array_equal(render(wrapped), render(direct))

@@ -260,7 +260,19 @@ fn bad_values_give_specific_errors() {
                 r#""x": { "sphere": { "center": [0, 1, 0], "radius": 1 }, "disk": { "center": [0, 0, 0], "normal": [0, 1, 0], "radius": 1 }, "material": "grey" }"#,
             ),
             &[
-                "bad.json: shapes.x: must have exactly one of \"sphere\", \"rect\", \"disk\", \"mesh\", \"gltf\", got \"sphere\", \"disk\"",
+                "bad.json: shapes.x: must have exactly one of \"sphere\", \"rect\", \"disk\", \"mesh\", \"gltf\", \"instance\", got \"sphere\", \"disk\"",
+            ],
+        ),
+        (
+            with_shapes(r#""x": { "instance": "ball" }"#),
+            &["bad.json: shapes.x.instance: must name an earlier shape with a mesh, got \"ball\""],
+        ),
+        (
+            with_shapes(
+                r#""m": { "mesh": { "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0]] }, "material": "grey" }, "x": { "instance": "m", "material": "grey" }"#,
+            ),
+            &[
+                "bad.json: shapes.x.material: an instance takes the material of the shape it places again",
             ],
         ),
         (

@@ -265,7 +265,7 @@ impl Reader {
         if a.as_str().is_empty() {
             return Ok(None);
         }
-        let file = a.resolved_path().unwrap_or(a.as_str()).to_string();
+        let file = self.asset_file(prim, attr, a);
         let name = format!("{}.{attr}", prim.as_str());
         self.out.textures.0.insert(
             name.clone(),

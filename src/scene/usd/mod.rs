@@ -107,7 +107,23 @@ pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
     r.stage_metadata()?;
     r.traverse()?;
     // Prims compose as they are visited: their errors are known after the traversal.
-    let errors = r.stage.composition_errors();
+    let mut errors = Vec::new();
+    for e in r.stage.composition_errors() {
+        match &e {
+            // A MaterialX document (pxr reads it with a plugin): its materials are not
+            // UsdPreviewSurfaces, which the material reader already says where they are used.
+            openusd::pcp::Error::MalformedLayer {
+                asset_path,
+                site_path,
+                ..
+            } if asset_path.to_ascii_lowercase().ends_with(".mtlx") => r.warn(
+                site_path,
+                "",
+                format!("@{asset_path}@ is a MaterialX document, which illum does not read"),
+            ),
+            _ => errors.push(e),
+        }
+    }
     if let Some(e) = errors.first() {
         return Err(SceneError::unsupported(
             &r.file,
@@ -234,6 +250,38 @@ impl Reader {
         }
     }
 
+    /// The file an asset-valued `prim.attr` names: a relative path is relative to the layer
+    /// that authored it, the strongest layer of the attribute's stack where the file exists
+    /// (openusd hands over the path as authored).
+    fn asset_file(&self, prim: &sdf::Path, attr: &str, a: &sdf::AssetPath) -> String {
+        if let Some(r) = a.resolved_path() {
+            return r.to_string();
+        }
+        let authored = a.as_str();
+        if Path::new(authored).is_absolute() {
+            return authored.to_string();
+        }
+        let stack = prim
+            .append_property(attr)
+            .ok()
+            .and_then(|p| self.stage.attribute(p).property_stack().ok())
+            .unwrap_or_default();
+        for (layer, _) in &stack {
+            let Some(dir) = Path::new(layer).parent() else {
+                continue;
+            };
+            let candidate = dir.join(authored);
+            if candidate.is_file() {
+                return candidate.display().to_string();
+            }
+        }
+        // Not found: the strongest layer's reading, for the error that names it.
+        match stack.first().and_then(|(l, _)| Path::new(l).parent()) {
+            Some(dir) => dir.join(authored).display().to_string(),
+            None => authored.to_string(),
+        }
+    }
+
     /// Whether `prim.attr` has an opinion (a default or time samples).
     fn authored(&mut self, prim: &sdf::Path, attr: &str) -> Result<bool> {
         Ok(self.attr(prim, attr)?.is_some())
@@ -313,6 +361,14 @@ impl Reader {
             self.pruned.push(path.clone());
             return Ok(());
         }
+        let draw_mode = self.token(path, "model:drawMode", "inherited")?;
+        if !matches!(draw_mode.as_str(), "inherited" | "default") {
+            self.warn(
+                path,
+                "model:drawMode",
+                format!("{draw_mode:?} is a viewport mode: the full geometry renders"),
+            );
+        }
         let parent = path
             .parent()
             .and_then(|p| self.world.get(&p).copied())
@@ -343,6 +399,11 @@ impl Reader {
                 path,
                 "",
                 format!("{kind} is not rendered (illum has no exact {kind}; author it as a Mesh)"),
+            ),
+            "Skeleton" | "SkelAnimation" | "BlendShape" => self.warn(
+                path,
+                "",
+                format!("{kind}: skinning is not applied (meshes render in their bind pose)"),
             ),
             "CylinderLight" | "GeometryLight" | "PortalLight" | "PluginLight" => self.warn(
                 path,

@@ -1,20 +1,32 @@
 //! UsdShade materials: the material bound to a gprim (`material:binding` for the full purpose,
-//! `bindMaterialAs` strength and collection bindings as openusd resolves them) read as a
-//! `UsdPreviewSurface`, mapped as illum maps glTF's metallic-roughness materials: diffuse =
-//! diffuseColor·(1−metallic) and one GGX-Smith lobe of alpha roughness² whose Schlick f0 mixes
-//! the dielectric's ((ior−1)/(ior+1))² toward diffuseColor by metallic (the specular workflow:
-//! f0 = specularColor, diffuse = diffuseColor).
+//! `bindMaterialAs` strength and collection bindings as openusd resolves them), its surface
+//! followed through node graphs to a `UsdPreviewSurface`, mapped as illum maps glTF's
+//! metallic-roughness materials: diffuse = diffuseColor·(1−metallic) and one GGX-Smith lobe of
+//! alpha roughness² whose Schlick f0 mixes the dielectric's ((ior−1)/(ior+1))² toward
+//! diffuseColor by metallic (the specular workflow: f0 = specularColor, diffuse = diffuseColor).
 
 use super::{Reader, Result, value};
 use crate::scene::format::{
     FilterDef, FresnelDef, LobeDef, MaterialDef, ModelDef, NumOrArray, TextureDef, WrapDef,
 };
-use openusd::schemas::shade::{self, Channel, MaterialBindingAPI, ReadPreviewSurface};
-use openusd::sdf;
+use openusd::schemas::shade::MaterialBindingAPI;
+use openusd::sdf::{self, Value};
 
 /// UsdPreviewSurface's diffuseColor fallback, also the colour of unbound gprims without a
 /// displayColor.
 const FALLBACK_GREY: [f64; 3] = [0.18; 3];
+
+/// Connections followed before a network is called cyclic.
+const MAX_HOPS: usize = 32;
+
+/// Where a shading input's value comes from, once connections through node graphs and
+/// material interface inputs are followed.
+enum Source {
+    Unset,
+    Value(Value),
+    /// An output of a Shader prim: (prim, output name).
+    Shader(sdf::Path, String),
+}
 
 impl Reader {
     /// The name of the illum material for `gprim` (made on first use). `double_sided` makes an
@@ -69,50 +81,94 @@ impl Reader {
         Ok(None)
     }
 
-    /// `primvars:displayColor` (its first value), else the fallback grey.
+    /// `primvars:displayColor` (its first value), else the fallback grey. A colour that varies
+    /// over the gprim is a warning (illum has no per-vertex colour).
     fn display_color(&mut self, gprim: &sdf::Path) -> Result<[f64; 3]> {
         let attr = "primvars:displayColor";
         let Some(v) = self.attr(gprim, attr)? else {
             return Ok(FALLBACK_GREY);
         };
-        let c = value::vec3_array(&v)
-            .and_then(|a| a.first().copied())
-            .or_else(|| value::vec3(&v));
-        match c {
-            Some(c) => Ok(c.map(|x| x.clamp(0.0, 1.0))),
-            None => Err(self.invalid(gprim, attr, value::show(&v), "expected color3f[]")),
+        let all = value::vec3_array(&v).or_else(|| value::vec3(&v).map(|c| vec![c]));
+        let Some(&first) = all.as_ref().and_then(|a| a.first()) else {
+            return Err(self.invalid(gprim, attr, value::show(&v), "expected color3f[]"));
+        };
+        if all.is_some_and(|a| a.iter().any(|c| *c != first)) {
+            self.warn(
+                gprim,
+                attr,
+                "varies over the prim: rendered in its first colour (illum has no per-vertex colour)",
+            );
         }
+        Ok(first.map(|x| x.clamp(0.0, 1.0)))
+    }
+
+    /// The source of `prim.attr`: its value, or what its connections lead to through node
+    /// graph and material inputs and outputs.
+    fn source(&mut self, prim: &sdf::Path, attr: &str) -> Result<Source> {
+        let (mut prim, mut attr) = (prim.clone(), attr.to_string());
+        for _ in 0..MAX_HOPS {
+            let path = prim
+                .append_property(attr.as_str())
+                .map_err(|e| self.read_error(&prim, &attr, e))?;
+            let sources = self
+                .stage
+                .attribute(path)
+                .connections()
+                .map_err(|e| self.read_error(&prim, &attr, e))?;
+            let Some(src) = sources.first() else {
+                return Ok(match self.attr(&prim, &attr)? {
+                    Some(v) => Source::Value(v),
+                    None => Source::Unset,
+                });
+            };
+            let (p, a) = src.as_str().rsplit_once('.').unwrap_or((src.as_str(), ""));
+            let p = sdf::path(p).map_err(|e| self.read_error(&prim, &attr, e))?;
+            let kind = self
+                .stage
+                .prim(p.clone())
+                .type_name()
+                .map_err(|e| self.read_error(&p, "", e))?
+                .map(|t| t.as_str().to_string())
+                .unwrap_or_default();
+            if kind == "Shader" {
+                return Ok(Source::Shader(p, a.to_string()));
+            }
+            (prim, attr) = (p, a.to_string());
+        }
+        Err(self.invalid(
+            &prim,
+            &attr,
+            "a connection loop",
+            "shading connections must end",
+        ))
+    }
+
+    fn shader_id(&mut self, shader: &sdf::Path) -> Result<String> {
+        self.token(shader, "info:id", "")
     }
 
     fn preview_surface(&mut self, material: &sdf::Path) -> Result<MaterialDef> {
-        let read = shade::read_preview_surface(&self.stage, material)
-            .map_err(|e| self.read_error(material, "outputs:surface", e))?;
-        let Some(ps) = read else {
-            self.warn(
-                material,
-                "outputs:surface",
-                "not a UsdPreviewSurface (MaterialX, MDL and other networks are not read): \
-                 rendered with UsdPreviewSurface's fallback grey",
-            );
-            return Ok(lambert(FALLBACK_GREY));
+        let shader = match self.source(material, "outputs:surface")? {
+            Source::Shader(p, _) if self.shader_id(&p)? == "UsdPreviewSurface" => p,
+            _ => {
+                self.warn(
+                    material,
+                    "outputs:surface",
+                    "not a UsdPreviewSurface (MaterialX, MDL and other networks are not read): \
+                     rendered with UsdPreviewSurface's fallback grey",
+                );
+                return Ok(lambert(FALLBACK_GREY));
+            }
         };
-        let shader = sdf::path(&ps.shader).map_err(|e| self.read_error(material, "", e))?;
-        self.no_textures(&shader, &ps)?;
-        self.no_other_connections(&shader, &ps)?;
-        let diffuse_tex = match ps.diffuse_color.texture() {
-            Some(_) => Some(self.uv_texture(&shader, "diffuseColor")?),
-            None => None,
-        };
-        let emission_tex = match ps.emissive_color.texture() {
-            Some(_) => Some(self.uv_texture(&shader, "emissiveColor")?),
-            None => None,
-        };
-        let v3 = |c: &Channel<openusd::gf::Vec3f>, fallback: [f64; 3]| {
-            c.value()
-                .map_or(fallback, |v| [v.x, v.y, v.z].map(f64::from))
-        };
-        let s = |c: &Channel<f32>, fallback: f64| c.value().map_or(fallback, |&v| f64::from(v));
-        let opacity = s(&ps.opacity, 1.0);
+        let diffuse_in = self.color_input(&shader, "diffuseColor", FALLBACK_GREY)?;
+        let emission_in = self.color_input(&shader, "emissiveColor", [0.0; 3])?;
+        let specular = self.plain_color(&shader, "specularColor", [0.0; 3])?;
+        let metallic = self.plain_number(&shader, "metallic", 0.0)?.clamp(0.0, 1.0);
+        let roughness = self
+            .plain_number(&shader, "roughness", 0.5)?
+            .clamp(0.0, 1.0);
+        let ior = self.plain_number(&shader, "ior", 1.5)?;
+        let opacity = self.plain_number(&shader, "opacity", 1.0)?;
         if opacity != 1.0 {
             return Err(self.invalid(
                 &shader,
@@ -121,7 +177,7 @@ impl Reader {
                 "illum renders opaque surfaces only",
             ));
         }
-        let clearcoat = s(&ps.clearcoat, 0.0);
+        let clearcoat = self.plain_number(&shader, "clearcoat", 0.0)?;
         if clearcoat != 0.0 {
             return Err(self.invalid(
                 &shader,
@@ -130,28 +186,26 @@ impl Reader {
                 "illum has no clearcoat lobe yet (0 renders exactly)",
             ));
         }
-        if ps.occlusion.is_set() {
-            self.warn(
-                &shader,
-                "inputs:occlusion",
-                "ignored (not a physical quantity)",
-            );
+        for (input, what) in [
+            (
+                "normal",
+                "normal maps are not rendered (the surface's own normals shade it)",
+            ),
+            ("occlusion", "ignored (not a physical quantity)"),
+            ("displacement", "displacement is not rendered"),
+        ] {
+            let attr = format!("inputs:{input}");
+            if !matches!(self.source(&shader, &attr)?, Source::Unset) {
+                self.warn(&shader, &attr, what);
+            }
         }
+        let specular_workflow = self.plain_number(&shader, "useSpecularWorkflow", 0.0)? != 0.0;
         // A textured colour is the texture times its `scale`, which illum's constant carries.
-        let base = match &diffuse_tex {
-            Some((_, scale)) => *scale,
-            None => v3(&ps.diffuse_color, FALLBACK_GREY),
-        };
-        let roughness = s(&ps.roughness, 0.5).clamp(0.0, 1.0);
-        let emission = match &emission_tex {
-            Some((_, scale)) => *scale,
-            None => v3(&ps.emissive_color, [0.0; 3]),
-        };
-        let specular_workflow = self.number(&shader, "inputs:useSpecularWorkflow", 0.0)? != 0.0;
+        let (base, diffuse_tex) = diffuse_in;
+        let (emission, emission_tex) = emission_in;
         let (diffuse, f0) = if specular_workflow {
-            (base, v3(&ps.specular_color, [0.0; 3]))
+            (base, specular)
         } else {
-            let metallic = s(&ps.metallic, 0.0).clamp(0.0, 1.0);
             if diffuse_tex.is_some() && metallic > 0.0 {
                 return Err(self.invalid(
                     &shader,
@@ -161,7 +215,6 @@ impl Reader {
                      own: illum renders textured dielectrics (metallic 0) only",
                 ));
             }
-            let ior = s(&ps.ior, 1.5);
             let dielectric = ((ior - 1.0) / (ior + 1.0)).powi(2);
             (
                 base.map(|c| c * (1.0 - metallic)),
@@ -170,79 +223,190 @@ impl Reader {
         };
         Ok(MaterialDef {
             diffuse: diffuse.map(|c| c.clamp(0.0, 1.0)),
-            diffuse_texture: diffuse_tex.map(|t| t.0),
+            diffuse_texture: diffuse_tex,
             specular: vec![LobeDef {
                 model: ModelDef::Ggx,
                 roughness: NumOrArray::One(roughness * roughness),
                 fresnel: FresnelDef::Schlick(f0.map(|c| c.clamp(0.0, 1.0))),
             }],
             emission,
-            emission_texture: emission_tex.map(|t| t.0),
+            emission_texture: emission_tex,
             two_sided: false,
             tangent: None,
         })
     }
 
-    /// The `UsdUVTexture` that `shader.inputs:<input>` connects to, as a texture of the scene
-    /// (its name) and its `scale`. Its `st` must come from a `UsdPrimvarReader_float2` of
-    /// `st`, the primvar meshes give; `bias`, a `black` wrap and unequal wraps are errors.
-    fn uv_texture(&mut self, shader: &sdf::Path, input: &str) -> Result<(String, [f64; 3])> {
+    /// A colour input that may be textured: (constant, texture name).
+    fn color_input(
+        &mut self,
+        shader: &sdf::Path,
+        input: &str,
+        fallback: [f64; 3],
+    ) -> Result<([f64; 3], Option<String>)> {
         let attr = format!("inputs:{input}");
-        let source = self.connection(shader, &attr)?;
-        let (tex_path, output) = source
-            .as_str()
-            .rsplit_once('.')
-            .map(|(p, o)| (p.to_string(), o.to_string()))
-            .unwrap_or_default();
-        let tex = sdf::path(&tex_path).map_err(|e| self.read_error(shader, &attr, e))?;
-        if output != "outputs:rgb" {
-            return Err(self.unsupported(
+        match self.source(shader, &attr)? {
+            Source::Shader(tex, output) => {
+                let (name, constant) = self.uv_texture(shader, &attr, &tex, &output)?;
+                Ok((constant, name))
+            }
+            other => Ok((self.color_of(shader, &attr, other, fallback)?, None)),
+        }
+    }
+
+    fn color_of(
+        &self,
+        shader: &sdf::Path,
+        attr: &str,
+        source: Source,
+        fallback: [f64; 3],
+    ) -> Result<[f64; 3]> {
+        match source {
+            Source::Unset => Ok(fallback),
+            Source::Value(v) => match value::vec3(&v) {
+                Some(c) if c.iter().all(|x| x.is_finite()) => Ok(c),
+                _ => Err(self.invalid(shader, attr, value::show(&v), "expected a finite color3f")),
+            },
+            Source::Shader(p, o) => Err(self.unsupported(
+                shader,
+                attr,
+                format!(
+                    "connected to {}.{o}: only diffuseColor and emissiveColor textures are read yet",
+                    p.as_str()
+                ),
+            )),
+        }
+    }
+
+    /// A colour input that must be a value (or unset).
+    fn plain_color(
+        &mut self,
+        shader: &sdf::Path,
+        input: &str,
+        fallback: [f64; 3],
+    ) -> Result<[f64; 3]> {
+        let attr = format!("inputs:{input}");
+        let source = self.source(shader, &attr)?;
+        self.color_of(shader, &attr, source, fallback)
+    }
+
+    /// A number input that must be a value (or unset).
+    fn plain_number(&mut self, shader: &sdf::Path, input: &str, fallback: f64) -> Result<f64> {
+        let attr = format!("inputs:{input}");
+        match self.source(shader, &attr)? {
+            Source::Unset => Ok(fallback),
+            Source::Value(v) => match value::scalar(&v) {
+                Some(x) if x.is_finite() => Ok(x),
+                _ => Err(self.invalid(shader, &attr, value::show(&v), "expected a finite number")),
+            },
+            Source::Shader(p, o) => Err(self.unsupported(
                 shader,
                 &attr,
                 format!(
-                    "connected to {}: a colour input reads a texture's outputs:rgb",
-                    source.as_str()
+                    "connected to {}.{o}: only diffuseColor and emissiveColor textures are read yet",
+                    p.as_str()
+                ),
+            )),
+        }
+    }
+
+    /// A value input of a node, through interface connections: its value or `fallback`.
+    fn node_value(&mut self, node: &sdf::Path, attr: &str) -> Result<Option<Value>> {
+        match self.source(node, attr)? {
+            Source::Unset => Ok(None),
+            Source::Value(v) => Ok(Some(v)),
+            Source::Shader(p, o) => Err(self.unsupported(
+                node,
+                attr,
+                format!("connected to {}.{o}: illum reads a value here", p.as_str()),
+            )),
+        }
+    }
+
+    fn node_token(&mut self, node: &sdf::Path, attr: &str, fallback: &str) -> Result<String> {
+        match self.node_value(node, attr)? {
+            None => Ok(fallback.to_string()),
+            Some(v) => value::token(&v)
+                .map(str::to_string)
+                .ok_or_else(|| self.invalid(node, attr, value::show(&v), "expected a token")),
+        }
+    }
+
+    /// The `UsdUVTexture` `tex` that `shader.attr` connects to (its `output`), as a texture of
+    /// the scene (its name) and its `scale`; without a file, no texture and its `fallback`.
+    /// Its `st` must come from a
+    /// `UsdPrimvarReader_float2` of `st`, the primvar meshes give; `bias`, a `black` wrap and
+    /// unequal wraps are errors.
+    fn uv_texture(
+        &mut self,
+        shader: &sdf::Path,
+        attr: &str,
+        tex: &sdf::Path,
+        output: &str,
+    ) -> Result<(Option<String>, [f64; 3])> {
+        let id = self.shader_id(tex)?;
+        if id != "UsdUVTexture" || output != "outputs:rgb" {
+            return Err(self.unsupported(
+                shader,
+                attr,
+                format!(
+                    "connected to {}.{output} ({id:?}): a colour input reads a UsdUVTexture's \
+                     outputs:rgb",
+                    tex.as_str()
                 ),
             ));
         }
-        let Some(file) = self.attr(&tex, "inputs:file")? else {
-            return Err(self.invalid(&tex, "inputs:file", "none", "a UsdUVTexture needs a file"));
+        let four = |r: &mut Self, attr: &str, fallback: [f64; 4]| -> Result<[f64; 4]> {
+            Ok(match r.node_value(tex, attr)? {
+                None => fallback,
+                Some(Value::Vec4f(v)) => [v.x, v.y, v.z, v.w].map(f64::from),
+                Some(Value::Vec4d(v)) => [v.x, v.y, v.z, v.w],
+                Some(v) => return Err(r.invalid(tex, attr, value::show(&v), "expected float4")),
+            })
         };
-        let sdf::Value::AssetPath(a) = &file else {
-            return Err(self.invalid(
-                &tex,
-                "inputs:file",
-                value::show(&file),
-                "expected an asset path",
-            ));
+        let file = match self.node_value(tex, "inputs:file")? {
+            Some(Value::AssetPath(a)) if !a.as_str().is_empty() => {
+                self.asset_file(tex, "inputs:file", &a)
+            }
+            Some(Value::AssetPath(_)) | None => {
+                // No image: the texture gives its fallback.
+                let f = four(self, "inputs:fallback", [0.0, 0.0, 0.0, 1.0])?;
+                return Ok((None, [f[0], f[1], f[2]]));
+            }
+            Some(v) => {
+                return Err(self.invalid(
+                    tex,
+                    "inputs:file",
+                    value::show(&v),
+                    "expected an asset path",
+                ));
+            }
         };
-        let file = a.resolved_path().unwrap_or(a.as_str()).to_string();
-        let wrap = |r: &mut Self, attr: &str| -> Result<WrapDef> {
-            Ok(match r.token(&tex, attr, "useMetadata")?.as_str() {
+        let mut wraps = Vec::new();
+        for attr in ["inputs:wrapS", "inputs:wrapT"] {
+            wraps.push(match self.node_token(tex, attr, "useMetadata")?.as_str() {
                 // The file's own wrap metadata is not read: repeat, the usual default.
                 "repeat" | "useMetadata" => WrapDef::Repeat,
                 "clamp" => WrapDef::Clamp,
                 "mirror" => WrapDef::Mirror,
                 other => {
-                    return Err(r.invalid(
-                        &tex,
+                    return Err(self.invalid(
+                        tex,
                         attr,
                         other,
                         "illum wraps repeat, clamp or mirror",
                     ));
                 }
-            })
-        };
-        let (s, t) = (wrap(self, "inputs:wrapS")?, wrap(self, "inputs:wrapT")?);
-        if std::mem::discriminant(&s) != std::mem::discriminant(&t) {
+            });
+        }
+        if std::mem::discriminant(&wraps[0]) != std::mem::discriminant(&wraps[1]) {
             return Err(self.unsupported(
-                &tex,
+                tex,
                 "inputs:wrapT",
                 "differs from inputs:wrapS: illum wraps both axes alike",
             ));
         }
         let srgb = match self
-            .token(&tex, "inputs:sourceColorSpace", "auto")?
+            .node_token(tex, "inputs:sourceColorSpace", "auto")?
             .as_str()
         {
             "auto" => None,
@@ -250,44 +414,45 @@ impl Reader {
             "raw" => Some(false),
             other => {
                 return Err(self.invalid(
-                    &tex,
+                    tex,
                     "inputs:sourceColorSpace",
                     other,
                     "expected auto, sRGB or raw",
                 ));
             }
         };
-        let four = |r: &mut Self, attr: &str, fallback: [f64; 4]| -> Result<[f64; 4]> {
-            Ok(match r.attr(&tex, attr)? {
-                None => fallback,
-                Some(sdf::Value::Vec4f(v)) => [v.x, v.y, v.z, v.w].map(f64::from),
-                Some(sdf::Value::Vec4d(v)) => [v.x, v.y, v.z, v.w],
-                Some(v) => return Err(r.invalid(&tex, attr, value::show(&v), "expected float4")),
-            })
-        };
         let scale = four(self, "inputs:scale", [1.0; 4])?;
         let bias = four(self, "inputs:bias", [0.0; 4])?;
         if bias[..3].iter().any(|&b| b != 0.0) {
             return Err(self.invalid(
-                &tex,
+                tex,
                 "inputs:bias",
                 format!("{bias:?}"),
                 "illum's textures take a scale only (bias 0)",
             ));
         }
         // Texture coordinates: the mesh's `st`, through a primvar reader.
-        let st = self.connection(&tex, "inputs:st")?;
-        let reader = st.prim_path();
-        let id = self.token(&reader, "info:id", "")?;
-        let var = self.token(&reader, "inputs:varname", "")?;
+        let reader = match self.source(tex, "inputs:st")? {
+            Source::Shader(p, _) => p,
+            _ => {
+                return Err(self.invalid(
+                    tex,
+                    "inputs:st",
+                    "not connected",
+                    "must connect to a UsdPrimvarReader_float2 of st",
+                ));
+            }
+        };
+        let id = self.shader_id(&reader)?;
+        let var = self.node_token(&reader, "inputs:varname", "")?;
         if id != "UsdPrimvarReader_float2" || var != "st" {
             return Err(self.unsupported(
-                &tex,
+                tex,
                 "inputs:st",
                 format!(
                     "connected to {} ({id:?} of {var:?}): illum maps textures by the mesh's \
                      primvars:st, through a UsdPrimvarReader_float2 of \"st\"",
-                    st.as_str()
+                    reader.as_str()
                 ),
             ));
         }
@@ -300,6 +465,7 @@ impl Reader {
                 Some(false) => " (raw)",
             }
         );
+        let wrap = wraps[0];
         self.out
             .textures
             .0
@@ -308,101 +474,10 @@ impl Reader {
                 file,
                 srgb,
                 filter: FilterDef::Bilinear,
-                wrap: s,
+                wrap,
                 pixels: None,
             });
-        Ok((name, [scale[0], scale[1], scale[2]]))
-    }
-
-    /// The one source `prim.attr` connects to.
-    fn connection(&mut self, prim: &sdf::Path, attr: &str) -> Result<sdf::Path> {
-        let path = prim
-            .append_property(attr)
-            .map_err(|e| self.read_error(prim, attr, e))?;
-        let sources = self
-            .stage
-            .attribute(path)
-            .connections()
-            .map_err(|e| self.read_error(prim, attr, e))?;
-        match sources.as_slice() {
-            [one] => Ok(one.clone()),
-            [] => Err(self.invalid(prim, attr, "no connection", "must connect to a source")),
-            _ => Err(self.invalid(
-                prim,
-                attr,
-                format!("{} connections", sources.len()),
-                "must connect to one source",
-            )),
-        }
-    }
-
-    /// Textured inputs other than diffuseColor and emissiveColor are an error until they are
-    /// read (a texture silently dropped would render a different material).
-    fn no_textures(&self, shader: &sdf::Path, ps: &ReadPreviewSurface) -> Result<()> {
-        let channels: [(&str, bool); 7] = [
-            ("specularColor", ps.specular_color.texture().is_some()),
-            ("metallic", ps.metallic.texture().is_some()),
-            ("roughness", ps.roughness.texture().is_some()),
-            ("opacity", ps.opacity.texture().is_some()),
-            ("ior", ps.ior.texture().is_some()),
-            ("clearcoat", ps.clearcoat.texture().is_some()),
-            ("normal", ps.normal.texture().is_some()),
-        ];
-        if let Some((name, _)) = channels.iter().find(|(_, t)| *t) {
-            return Err(self.unsupported(
-                shader,
-                &format!("inputs:{name}"),
-                "connected to a UsdUVTexture: only diffuseColor and emissiveColor textures are read yet",
-            ));
-        }
-        Ok(())
-    }
-}
-
-impl Reader {
-    /// An input connected to anything but a UsdUVTexture (a node graph, a material interface
-    /// input) would read as unset: an error instead.
-    fn no_other_connections(&mut self, shader: &sdf::Path, ps: &ReadPreviewSurface) -> Result<()> {
-        let inputs: [(&str, bool); 12] = [
-            ("diffuseColor", ps.diffuse_color.texture().is_some()),
-            ("emissiveColor", ps.emissive_color.texture().is_some()),
-            ("specularColor", ps.specular_color.texture().is_some()),
-            ("metallic", ps.metallic.texture().is_some()),
-            ("roughness", ps.roughness.texture().is_some()),
-            ("clearcoat", ps.clearcoat.texture().is_some()),
-            (
-                "clearcoatRoughness",
-                ps.clearcoat_roughness.texture().is_some(),
-            ),
-            ("opacity", ps.opacity.texture().is_some()),
-            ("opacityThreshold", ps.opacity_threshold.texture().is_some()),
-            ("ior", ps.ior.texture().is_some()),
-            ("normal", ps.normal.texture().is_some()),
-            ("occlusion", ps.occlusion.texture().is_some()),
-        ];
-        for (name, textured) in inputs {
-            let attr = format!("inputs:{name}");
-            let path = shader
-                .append_property(attr.as_str())
-                .map_err(|e| self.read_error(shader, &attr, e))?;
-            let sources = self
-                .stage
-                .attribute(path)
-                .connections()
-                .map_err(|e| self.read_error(shader, &attr, e))?;
-            if !textured && let Some(src) = sources.first() {
-                return Err(self.unsupported(
-                    shader,
-                    &attr,
-                    format!(
-                        "connected to {}, which illum does not read (inputs take values or a \
-                         UsdUVTexture)",
-                        src.as_str()
-                    ),
-                ));
-            }
-        }
-        Ok(())
+        Ok((Some(name), [scale[0], scale[1], scale[2]]))
     }
 }
 

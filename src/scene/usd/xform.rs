@@ -110,7 +110,17 @@ impl Reader {
             }
             "transform" => match &v {
                 // Row-major for row vectors = column-major for column vectors.
-                Value::Matrix4d(m) => DMat4::from_cols_array(&m.0),
+                // Row vectors: the last column must be (0, 0, 0, 1).
+                Value::Matrix4d(m)
+                    if [m.0[3], m.0[7], m.0[11], m.0[15]] == [0.0, 0.0, 0.0, 1.0] =>
+                {
+                    DMat4::from_cols_array(&m.0)
+                }
+                Value::Matrix4d(_) => {
+                    return Err(bad(
+                        "must be affine (its last column (0, 0, 0, 1)): illum has no projective transforms",
+                    ));
+                }
                 _ => return Err(bad("expected a matrix4d")),
             },
             _ => {
