@@ -596,3 +596,64 @@ def test_surfaces_behind_node_graphs_and_interface_inputs(tmp_path):
     wrapped, direct = build("wrapped", True), build("direct", False)
     assert wrapped.warnings == []
     assert np.array_equal(render(wrapped), render(direct))
+
+
+def test_point_instancers_place_their_prototypes_as_pxr_does(tmp_path):
+    s = new_stage(tmp_path / "pi.usda")
+    camera(s, (0, 1.5, 8))
+    inst = UsdGeom.PointInstancer.Define(s, "/World/Scatter")
+    inst.AddTranslateOp().Set((0.2, 0, -0.5))
+    box_root = UsdGeom.Xform.Define(s, "/World/Scatter/Protos/Box")
+    box_root.AddTranslateOp().Set((0, 0.1, 0))
+    mesh(s, "/World/Scatter/Protos/Box/Geom", BOX_POINTS, [4] * 6, BOX_FACES)
+    ball = UsdGeom.Sphere.Define(s, "/World/Scatter/Protos/Ball")
+    ball.CreateRadiusAttr(0.3)
+    inst.CreatePrototypesRel().SetTargets([box_root.GetPath(), ball.GetPath()])
+    inst.CreateProtoIndicesAttr([0, 1, 0, 1, 0])
+    inst.CreatePositionsAttr([(-2, 0, 0), (-1, 0.3, 0), (0, 0, 0), (1, 0.3, 0), (2, 0, 0)])
+    # Unit quaternions exact in half precision (pxr does not renormalize them; illum does).
+    inst.CreateOrientationsAttr([Gf.Quath(1, 0, 0, 0), Gf.Quath(1, 0, 0, 0),
+                                 Gf.Quath(0.5, 0.5, 0.5, 0.5), Gf.Quath(1, 0, 0, 0),
+                                 Gf.Quath(0, 0, 1, 0)])
+    inst.CreateScalesAttr([(1, 1, 1), (1.5, 1.5, 1.5), (0.8, 1.2, 0.8), (1, 1, 1), (1, 1, 1)])
+    inst.CreateIdsAttr([10, 11, 12, 13, 14])
+    inst.CreateInvisibleIdsAttr([13])
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+    # pxr's instance transforms (each with its prototype's own; visible instances only),
+    # under the instancer's.
+    xforms = iter(inst.ComputeInstanceTransformsAtTime(Usd.TimeCode.Default(),
+                                                       Usd.TimeCode.Default()))
+    top = UsdGeom.Xformable(inst).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+    tris = [q[k] for q in (BOX_FACES[i:i + 4] for i in range(0, 24, 4))
+            for k in (0, 1, 2, 0, 2, 3)]
+    shapes, first = {}, None
+    for i, proto in enumerate([0, 1, 0, 1, 0]):
+        if i == 3:
+            continue  # invisible
+        m = np.array(next(xforms) * top, dtype=np.float64).T
+        if proto == 0:
+            t = {"matrix": list(m.reshape(-1))}
+            if first is None:
+                first = f"i{i}"
+                shapes[first] = {"mesh": {"positions": [list(p) for p in BOX_POINTS],
+                                          "indices": tris}, "material": "grey", "transform": t}
+            else:
+                shapes[f"i{i}"] = {"instance": first, "transform": t}
+        else:
+            shapes[f"i{i}"] = {"sphere": {"center": list(m[:3, 3]),
+                                          "radius": 0.3 * float(np.linalg.norm(m[:3, 0]))},
+                               "material": "grey"}
+    d = {
+        "camera": json_camera((0, 1.5, 8), (0, 1.5, 7)),
+        "materials": {"grey": {"diffuse": [F32(0.18)] * 3}},
+        "shapes": shapes,
+        "lights": {"sky": {"dome": {"rotation": 180}}},
+    }
+    usd = illum.load(tmp_path / "pi.usda")
+    assert usd.warnings == []
+    a, b = render(usd), render(twin(d, tmp_path))
+    assert a.mean() > 0.01
+    np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6)
+    p = cli("render", tmp_path / "pi.usda", "-o", tmp_path / "pi.exr", "--spp", 1)
+    assert p.returncode == 0 and "(12 triangles;" in p.stderr, p.stderr

@@ -35,33 +35,39 @@ impl<T: Copy> Primvar<T> {
     }
 }
 
+/// Where a gprim goes: its shape's name, its world transform, and the key of the meshes it may
+/// share (its prototype prim, for instances), with which it places an existing mesh again.
+pub(super) struct Place {
+    pub name: String,
+    pub world: DMat4,
+    pub share: Option<String>,
+}
+
 impl Reader {
     /// A gprim's shape entry: its material and, for meshes, its transform.
-    fn add_shape(&mut self, prim: &sdf::Path, mut shape: ShapeDef) -> Result<()> {
+    fn add_shape(&mut self, prim: &sdf::Path, at: &Place, mut shape: ShapeDef) -> Result<()> {
         let double_sided = self.boolean(prim, "doubleSided", false)?;
         shape.material = Some(self.material(prim, double_sided)?);
-        self.out.shapes.0.insert(prim.as_str().to_string(), shape);
+        self.out.shapes.0.insert(at.name.clone(), shape);
         Ok(())
     }
 
-    /// A mesh shape placed by `world`. The prims of instances (instance proxies) share their
-    /// prototype's mesh: the first makes it (`build`), the others place it again (`instance`).
+    /// A mesh shape at `at`. Gprims with the same share key and material share one mesh: the
+    /// first makes it (`build`), the others place it again (an `instance` shape).
     fn mesh_shape(
         &mut self,
         prim: &sdf::Path,
-        world: DMat4,
+        at: &Place,
         build: impl FnOnce(&mut Self) -> Result<Option<MeshDef>>,
     ) -> Result<()> {
         let double_sided = self.boolean(prim, "doubleSided", false)?;
         let material = self.material(prim, double_sided)?;
         let transform = Some(TransformDef {
-            matrix: Some(row_major(world)),
+            matrix: Some(row_major(at.world)),
             ..Default::default()
         });
-        let key = self
-            .prototype_of(prim)?
-            .map(|p| format!("{}\n{material}", p.as_str()));
-        let name = prim.as_str().to_string();
+        let key = at.share.as_ref().map(|p| format!("{p}\n{material}"));
+        let name = at.name.clone();
         if let Some(first) = key.as_ref().and_then(|k| self.instanced.get(k)) {
             let shape = ShapeDef {
                 instance: Some(first.clone()),
@@ -87,8 +93,20 @@ impl Reader {
         Ok(())
     }
 
+    /// The gprim at `prim` of a supported kind, placed at `at`; false for another kind.
+    pub(super) fn gprim(&mut self, prim: &sdf::Path, kind: &str, at: &Place) -> Result<bool> {
+        match kind {
+            "Mesh" => self.mesh_shape(prim, at, |r| r.read_mesh(prim))?,
+            "Sphere" => self.sphere(prim, at)?,
+            "Cube" => self.cube(prim, at)?,
+            "Plane" => self.plane(prim, at)?,
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+
     /// The prim of the prototype that an instance proxy stands for.
-    fn prototype_of(&self, prim: &sdf::Path) -> Result<Option<sdf::Path>> {
+    pub(super) fn prototype_of(&self, prim: &sdf::Path) -> Result<Option<sdf::Path>> {
         let p = self.stage.prim(prim.clone());
         let read = |e| self.read_error(prim, "", e);
         if !p.is_instance_proxy().map_err(read)? {
@@ -97,10 +115,6 @@ impl Reader {
         Ok(p.prim_in_prototype()
             .map_err(|e| self.read_error(prim, "", e))?
             .map(|q| q.path().clone()))
-    }
-
-    pub(super) fn mesh(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
-        self.mesh_shape(prim, world, |r| r.read_mesh(prim))
     }
 
     /// A Mesh prim's triangles, or None (with a warning) when it has none.
@@ -218,7 +232,7 @@ impl Reader {
         Ok(Some(mesh))
     }
 
-    fn vec3s(&mut self, prim: &sdf::Path, attr: &str) -> Result<Option<Vec<[f64; 3]>>> {
+    pub(super) fn vec3s(&mut self, prim: &sdf::Path, attr: &str) -> Result<Option<Vec<[f64; 3]>>> {
         match self.attr(prim, attr)? {
             None => Ok(None),
             Some(v) => value::vec3_array(&v).map(Some).ok_or_else(|| {
@@ -232,7 +246,7 @@ impl Reader {
         }
     }
 
-    fn ints(&mut self, prim: &sdf::Path, attr: &str) -> Result<Option<Vec<i64>>> {
+    pub(super) fn ints(&mut self, prim: &sdf::Path, attr: &str) -> Result<Option<Vec<i64>>> {
         match self.attr(prim, attr)? {
             None => Ok(None),
             Some(v) => value::int_array(&v)
@@ -391,7 +405,8 @@ impl Reader {
         Ok(s)
     }
 
-    pub(super) fn sphere(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
+    fn sphere(&mut self, prim: &sdf::Path, at: &Place) -> Result<()> {
+        let world = at.world;
         let radius = self.number(prim, "radius", 1.0)?;
         let s = self.uniform_scale(
             prim,
@@ -401,6 +416,7 @@ impl Reader {
         let center = world.transform_point3(DVec3::ZERO);
         self.add_shape(
             prim,
+            at,
             ShapeDef {
                 sphere: Some(SphereDef {
                     center: center.to_array(),
@@ -412,7 +428,7 @@ impl Reader {
     }
 
     /// A cube of edge `size` centred on the origin: 6 faces of 2 triangles, outward.
-    pub(super) fn cube(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
+    fn cube(&mut self, prim: &sdf::Path, at: &Place) -> Result<()> {
         let h = self.number(prim, "size", 2.0)? / 2.0;
         let mut positions = Vec::new();
         let mut normals = Vec::new();
@@ -440,11 +456,11 @@ impl Reader {
             normals: Some(normals),
             ..Default::default()
         };
-        self.mesh_shape(prim, world, |_| Ok(Some(mesh)))
+        self.mesh_shape(prim, at, |_| Ok(Some(mesh)))
     }
 
     /// A `width` × `length` rectangle facing +`axis`: 2 triangles.
-    pub(super) fn plane(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
+    fn plane(&mut self, prim: &sdf::Path, at: &Place) -> Result<()> {
         let w = self.number(prim, "width", 2.0)? / 2.0;
         let l = self.number(prim, "length", 2.0)? / 2.0;
         // (width axis, length axis, normal) per UsdGeomPlane's `axis`.
@@ -470,6 +486,6 @@ impl Reader {
             normals: Some(vec![n.to_array(); 4]),
             ..Default::default()
         };
-        self.mesh_shape(prim, world, |_| Ok(Some(mesh)))
+        self.mesh_shape(prim, at, |_| Ok(Some(mesh)))
     }
 }

@@ -7,6 +7,7 @@
 
 mod camera;
 mod geom;
+mod instancer;
 mod lux;
 mod shade;
 mod value;
@@ -376,23 +377,20 @@ impl Reader {
         let (local, reset) = self.local_transform(path)?;
         let world = if reset { self.to_y_up } else { parent } * local;
         self.world.insert(path.clone(), world);
+        let at = geom::Place {
+            name: path.as_str().to_string(),
+            world,
+            share: self.prototype_of(path)?.map(|p| p.as_str().to_string()),
+        };
+        if self.gprim(path, &kind, &at)? {
+            return Ok(());
+        }
         match kind.as_str() {
-            "Mesh" => self.mesh(path, world)?,
-            "Sphere" => self.sphere(path, world)?,
-            "Cube" => self.cube(path, world)?,
-            "Plane" => self.plane(path, world)?,
             "RectLight" | "DiskLight" | "SphereLight" | "DistantLight" | "DomeLight"
             | "DomeLight_1" => self.light(path, &kind, world)?,
             "Camera" => self.cameras.push(path.clone()),
             "RenderSettings" => self.render_settings.push(path.clone()),
-            "PointInstancer" => {
-                self.warn(
-                    path,
-                    "",
-                    "PointInstancer is not read yet: its instances are not rendered",
-                );
-                self.pruned.push(path.clone());
-            }
+            "PointInstancer" => self.point_instancer(path, world)?,
             "Cylinder" | "Cone" | "Capsule" | "Cylinder_1" | "Capsule_1" | "Points"
             | "BasisCurves" | "NurbsCurves" | "HermiteCurves" | "NurbsPatch" | "TetMesh"
             | "Volume" => self.warn(
