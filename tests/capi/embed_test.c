@@ -114,6 +114,13 @@ int main(void) {
     CHECK(bad == NULL, "no scene on error");
     CHECK(illum_prepare(NULL, NULL, NULL) == ILLUM_STATUS_ERROR_NULL, "NULL context");
 
+    /* A USD stage loads as a scene file does (the test runs in the repository root). */
+    IllumScene *stage = NULL;
+    OK(illum_scene_load("scenes/lookdev.usda", &stage));
+    illum_scene_destroy(stage);
+    CHECK(illum_scene_load("scenes/nowhere.usda", &bad) != ILLUM_STATUS_OK, "a missing stage");
+    CHECK(strstr(illum_last_error(), "nowhere.usda") != NULL, "message: %s", illum_last_error());
+
     IllumScene *scene = NULL;
     IllumPrepared *prepared = NULL;
     OK(illum_scene_from_json(SCENE, NULL, &scene));
