@@ -657,3 +657,42 @@ def test_point_instancers_place_their_prototypes_as_pxr_does(tmp_path):
     np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6)
     p = cli("render", tmp_path / "pi.usda", "-o", tmp_path / "pi.exr", "--spp", 1)
     assert p.returncode == 0 and "(12 triangles;" in p.stderr, p.stderr
+
+
+def rect_irradiance(radiance, w, h, d):
+    """Irradiance at the point a distance d below the centre of a w × h rectangle of uniform
+    radiance, facing it: four corner rectangles of the classic form factor."""
+    x, y = (w / 2) / d, (h / 2) / d
+    corner = 0.5 * (x / math.sqrt(1 + x * x) * math.atan(y / math.sqrt(1 + x * x))
+                    + y / math.sqrt(1 + y * y) * math.atan(x / math.sqrt(1 + y * y)))
+    return 4 * radiance * corner
+
+
+@pytest.mark.parametrize("normalize", [False, True])
+def test_a_rect_light_lights_a_diffuse_plane_as_usdlux_defines(tmp_path, normalize):
+    """A RectLight of intensity I and exposure E (normalized: over its area) d above a Lambert
+    plane of albedo ρ: the plane's radiance below its centre is ρ/π × the closed-form irradiance
+    of radiance I·2^E(/area). The tolerance is the render's own noise (4σ of the pixels' mean,
+    from their variance plane) plus the footprint's curvature (< 1e-4)."""
+    w, h, d, intensity, exposure, albedo = 2.0, 1.0, 1.5, 5.0, 1.5, 0.5
+    s = new_stage(tmp_path / "rect.usda")
+    camera(s, (0, d / 2, 0), size=(8, 8), rotate=(-90, 0, 0), focal=500)
+    floor = mesh(s, "/World/Floor", [(-50, 0, -50), (-50, 0, 50), (50, 0, 50), (50, 0, -50)],
+                 [4], [0, 1, 2, 3])
+    floor.CreateDisplayColorAttr([(albedo, albedo, albedo)])
+    light = UsdLux.RectLight.Define(s, "/Lights/Panel")
+    light.CreateWidthAttr(w)
+    light.CreateHeightAttr(h)
+    light.CreateIntensityAttr(intensity)
+    light.CreateExposureAttr(exposure)
+    light.CreateNormalizeAttr(normalize)
+    api = UsdGeom.XformCommonAPI(light)
+    api.SetTranslate((0, d, 0))
+    api.SetRotate((-90, 0, 0))  # emits along -Y, onto the plane
+    s.Save()
+    radiance = intensity * 2 ** exposure / (w * h if normalize else 1)
+    want = albedo / math.pi * rect_irradiance(radiance, w, h, d)
+    r = illum.load(tmp_path / "rect.usda").render(spp=256, integrator="direct", light_samples=4)
+    got = float(r.beauty.mean())
+    sigma = math.sqrt(float(r.variance.mean()) / r.beauty[..., 0].size)
+    assert abs(got - want) <= 4 * sigma + 1e-4 * want, (got, want, sigma)
