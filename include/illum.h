@@ -194,6 +194,13 @@ enum IllumStatus illum_scene_from_json(const char *json,
 // A scene from a scene file.
 enum IllumStatus illum_scene_load(const char *path, struct IllumScene **out_scene);
 
+// What the scene file holds that illum does not render (a USD stage's prims and attributes):
+// `*out_count` warnings, one per line in `*out_text` ("" when there are none), valid until
+// the thread's next call of this function.
+enum IllumStatus illum_scene_warnings(struct IllumScene *scene,
+                                      const char **out_text,
+                                      uint32_t *out_count);
+
 void illum_scene_destroy(struct IllumScene *scene);
 
 // Moves the camera (resolution unchanged).

@@ -44,6 +44,36 @@ pub unsafe extern "C" fn illum_scene_load(
     })
 }
 
+thread_local! {
+    static WARNINGS: std::cell::RefCell<std::ffi::CString> =
+        std::cell::RefCell::new(std::ffi::CString::default());
+}
+
+/// What the scene file holds that illum does not render (a USD stage's prims and attributes):
+/// `*out_count` warnings, one per line in `*out_text` ("" when there are none), valid until
+/// the thread's next call of this function.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn illum_scene_warnings(
+    scene: *mut IllumScene,
+    out_text: *mut *const c_char,
+    out_count: *mut u32,
+) -> IllumStatus {
+    guard(|| unsafe {
+        let s = handle(scene, "scene")?;
+        if out_text.is_null() || out_count.is_null() {
+            return Err(null("out_text or out_count"));
+        }
+        let text =
+            std::ffi::CString::new(s.0.warnings.join("\n").replace('\0', " ")).unwrap_or_default();
+        *out_count = s.0.warnings.len() as u32;
+        WARNINGS.with(|w| {
+            *w.borrow_mut() = text;
+            *out_text = w.borrow().as_ptr();
+        });
+        Ok(())
+    })
+}
+
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn illum_scene_destroy(scene: *mut IllumScene) {
     if !scene.is_null() {

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static int failures = 0;
 
@@ -117,7 +118,25 @@ int main(void) {
     /* A USD stage loads as a scene file does (the test runs in the repository root). */
     IllumScene *stage = NULL;
     OK(illum_scene_load("scenes/lookdev.usda", &stage));
+    const char *warnings = NULL;
+    uint32_t warning_count = 99;
+    OK(illum_scene_warnings(stage, &warnings, &warning_count));
+    CHECK(warning_count == 0 && strcmp(warnings, "") == 0, "lookdev: %u warnings: %s", warning_count, warnings);
     illum_scene_destroy(stage);
+    /* A stage with what illum does not render: its warnings name the prims. */
+    char path[64];
+    snprintf(path, sizeof path, "/tmp/illum-capi-%d.usda", (int)getpid());
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL, "write %s", path);
+    fputs("#usda 1.0\ndef Camera \"Cam\" {}\ndef DomeLight \"Sky\" {}\n"
+          "def Cylinder \"Can\" {}\ndef Cone \"Hat\" {}\n", f);
+    fclose(f);
+    OK(illum_scene_load(path, &stage));
+    OK(illum_scene_warnings(stage, &warnings, &warning_count));
+    CHECK(warning_count == 2 && strstr(warnings, "/Can: Cylinder") && strstr(warnings, "\n/Hat: Cone"),
+          "%u warnings: %s", warning_count, warnings);
+    illum_scene_destroy(stage);
+    remove(path);
     CHECK(illum_scene_load("scenes/nowhere.usda", &bad) != ILLUM_STATUS_OK, "a missing stage");
     CHECK(strstr(illum_last_error(), "nowhere.usda") != NULL, "message: %s", illum_last_error());
 

@@ -19,7 +19,7 @@ struct Part {
 impl Reader {
     pub(super) fn point_instancer(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
         // The prototypes are read from here, not as prims of their own.
-        self.pruned.push(prim.clone());
+        self.pruned.insert(prim.clone());
         let rel = prim
             .append_property("prototypes")
             .map_err(|e| self.read_error(prim, "prototypes", e))?;

@@ -18,7 +18,7 @@ use super::format::{CameraDef, NamedMap, SceneFile};
 use glam::DMat4;
 use openusd::sdf::{self, Value};
 use openusd::usd;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -46,7 +46,7 @@ pub(crate) struct Reader {
     /// World transforms of the prims visited, by path (parents come before children).
     world: HashMap<sdf::Path, DMat4>,
     /// Prims whose subtree is left out (invisible, guide or proxy purpose, materials, ...).
-    pruned: Vec<sdf::Path>,
+    pruned: HashSet<sdf::Path>,
     out: SceneFile,
     /// illum material names by (bound material or display colour, two-sided emission).
     materials: HashMap<String, String>,
@@ -81,7 +81,7 @@ pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
         to_y_up: DMat4::IDENTITY,
         z_up: false,
         world: HashMap::new(),
-        pruned: Vec::new(),
+        pruned: HashSet::new(),
         out: SceneFile {
             _schema: None,
             description: None,
@@ -330,7 +330,17 @@ impl Reader {
             })
             .map_err(|e| self.read_error(&root, "", e))?;
         for path in paths {
-            if self.pruned.iter().any(|p| path.has_prefix(p)) {
+            // A prim is left out with any ancestor that was.
+            let mut up = path.parent();
+            let mut pruned = false;
+            while let Some(p) = up {
+                if self.pruned.contains(&p) {
+                    pruned = true;
+                    break;
+                }
+                up = p.parent();
+            }
+            if pruned {
                 continue;
             }
             self.prim(&path)?;
@@ -350,16 +360,16 @@ impl Reader {
             "Material" | "Shader" | "NodeGraph" | "GeomSubset"
         ) {
             // Read through the bindings of the geometry that uses them.
-            self.pruned.push(path.clone());
+            self.pruned.insert(path.clone());
             return Ok(());
         }
         if self.token(path, "visibility", "inherited")? == "invisible" {
-            self.pruned.push(path.clone());
+            self.pruned.insert(path.clone());
             return Ok(());
         }
         let purpose = self.token(path, "purpose", "default")?;
         if purpose == "guide" || purpose == "proxy" {
-            self.pruned.push(path.clone());
+            self.pruned.insert(path.clone());
             return Ok(());
         }
         let draw_mode = self.token(path, "model:drawMode", "inherited")?;
