@@ -517,6 +517,12 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path):
     assert np.array_equal(a, b)
     top, bottom = a[12, 16], a[20, 16]
     assert top[0] > 3 * top[1] and bottom[1] > 3 * bottom[0], (top, bottom)
+    # Packaged as USDZ in a folder of its own: the image is read from inside the package.
+    from pxr import UsdUtils
+    (tmp_path / "pkg").mkdir()
+    assert UsdUtils.CreateNewUsdzPackage(str(tmp_path / "tex.usda"), str(tmp_path / "pkg" / "tex.usdz"))
+    assert not (tmp_path / "pkg" / "halves.exr").exists()
+    assert np.array_equal(render(illum.load(tmp_path / "pkg" / "tex.usdz")), a)
 
 
 BOX_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),

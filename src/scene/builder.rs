@@ -128,6 +128,7 @@ impl SceneBuilder {
                 height,
                 rgba: rgba.to_vec(),
             }),
+            bytes: None,
         };
         self.texture(name, def)
     }

@@ -98,6 +98,12 @@ pub struct TextureDef {
     #[serde(skip)]
     #[schemars(skip)]
     pub pixels: Option<HostPixels>,
+    /// The image file's bytes, read by the loader from where a plain path cannot reach (an
+    /// image inside a USDZ package); `file` names it for messages and its kind. Not part of
+    /// the file format.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub bytes: Option<Vec<u8>>,
 }
 
 /// An image in host memory: `rgba` holds width × height RGBA texels, row-major, top row first.

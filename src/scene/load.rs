@@ -278,7 +278,8 @@ impl Builder<'_> {
                 .map(|t| self.sampled(t, def));
         }
         let field = format!("textures.{name}.file");
-        let kind = ImageKind::from_path(&def.file).ok_or_else(|| {
+        // A packaged image is named `package.usdz[inner.png]`.
+        let kind = ImageKind::from_path(def.file.trim_end_matches(']')).ok_or_else(|| {
             self.ctx.err(
                 &field,
                 quoted(&def.file),
@@ -287,8 +288,11 @@ impl Builder<'_> {
         })?;
         let path = self.base_dir.join(&def.file);
         // The first bytes first: a huge file that is no image fails before it is read whole.
-        let head = read_head(&path)
-            .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
+        let head = match &def.bytes {
+            Some(b) => b[..b.len().min(16)].to_vec(),
+            None => read_head(&path)
+                .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?,
+        };
         match ImageKind::sniff(&head) {
             Some(k) if k == kind => {}
             found => {
@@ -302,8 +306,13 @@ impl Builder<'_> {
                 ));
             }
         }
-        let bytes = read_capped(&path, MAX_ASSET_FILE_BYTES)
-            .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?;
+        let bytes = match &def.bytes {
+            Some(b) => std::borrow::Cow::Borrowed(b.as_slice()),
+            None => std::borrow::Cow::Owned(
+                read_capped(&path, MAX_ASSET_FILE_BYTES)
+                    .map_err(|e| SceneError::file_read(self.ctx.file, &field, &def.file, &e))?,
+            ),
+        };
         let srgb = def.srgb.unwrap_or(kind.srgb_by_default());
         let t = texture::decode(name, &bytes, kind, srgb)
             .map_err(|m| SceneError::decode(self.ctx.file, &field, &def.file, m))?;

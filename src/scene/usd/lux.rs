@@ -265,7 +265,7 @@ impl Reader {
         if a.as_str().is_empty() {
             return Ok(None);
         }
-        let file = self.asset_file(prim, attr, a);
+        let (file, bytes) = self.asset_file(prim, attr, a);
         let name = format!("{}.{attr}", prim.as_str());
         self.out.textures.0.insert(
             name.clone(),
@@ -275,6 +275,7 @@ impl Reader {
                 filter: FilterDef::Bilinear,
                 wrap: WrapDef::Repeat,
                 pixels: None,
+                bytes,
             },
         );
         Ok(Some(name))

@@ -251,16 +251,22 @@ impl Reader {
         }
     }
 
-    /// The file an asset-valued `prim.attr` names: a relative path is relative to the layer
-    /// that authored it, the strongest layer of the attribute's stack where the file exists
+    /// The file an asset-valued `prim.attr` names, and its bytes when it lies inside a USDZ
+    /// package (`package.usdz[inner.png]`). A relative path is relative to the layer that
+    /// authored it: the strongest layer of the attribute's stack where the file exists
     /// (openusd hands over the path as authored).
-    fn asset_file(&self, prim: &sdf::Path, attr: &str, a: &sdf::AssetPath) -> String {
-        if let Some(r) = a.resolved_path() {
-            return r.to_string();
+    fn asset_file(
+        &self,
+        prim: &sdf::Path,
+        attr: &str,
+        a: &sdf::AssetPath,
+    ) -> (String, Option<Vec<u8>>) {
+        let authored = a.resolved_path().unwrap_or(a.as_str());
+        if openusd::ar::is_package_relative_path(authored) {
+            return (authored.to_string(), packaged(authored));
         }
-        let authored = a.as_str();
         if Path::new(authored).is_absolute() {
-            return authored.to_string();
+            return (authored.to_string(), None);
         }
         let stack = prim
             .append_property(attr)
@@ -268,19 +274,30 @@ impl Reader {
             .and_then(|p| self.stage.attribute(p).property_stack().ok())
             .unwrap_or_default();
         for (layer, _) in &stack {
+            // A layer inside a package: the file is beside it in the package.
+            if let Some((package, inner)) = openusd::ar::split_package_relative_path_outer(layer) {
+                let dir = Path::new(&inner).parent().unwrap_or(Path::new(""));
+                let joined = normalize(&dir.join(authored));
+                let path = openusd::ar::join_package_relative_path(&package, &joined);
+                if let Some(bytes) = packaged(&path) {
+                    return (path, Some(bytes));
+                }
+                continue;
+            }
             let Some(dir) = Path::new(layer).parent() else {
                 continue;
             };
             let candidate = dir.join(authored);
             if candidate.is_file() {
-                return candidate.display().to_string();
+                return (candidate.display().to_string(), None);
             }
         }
         // Not found: the strongest layer's reading, for the error that names it.
-        match stack.first().and_then(|(l, _)| Path::new(l).parent()) {
+        let file = match stack.first().and_then(|(l, _)| Path::new(l).parent()) {
             Some(dir) => dir.join(authored).display().to_string(),
             None => authored.to_string(),
-        }
+        };
+        (file, None)
     }
 
     /// Whether `prim.attr` has an opinion (a default or time samples).
@@ -422,4 +439,31 @@ impl Reader {
         }
         Ok(())
     }
+}
+
+/// The bytes of a file inside a USDZ package (`package.usdz[inner]`), if it is there.
+fn packaged(path: &str) -> Option<Vec<u8>> {
+    use openusd::ar::Resolver as _;
+    use std::io::Read as _;
+    let mut asset = openusd::ar::DefaultResolver::new()
+        .open_asset(&openusd::ar::ResolvedPath::new(path))
+        .ok()?;
+    let mut bytes = Vec::new();
+    asset.read_to_end(&mut bytes).ok()?;
+    Some(bytes)
+}
+
+/// `a/./b/../c` as `a/c`, for paths inside a package (no file system to ask).
+fn normalize(p: &Path) -> String {
+    let mut parts: Vec<&str> = Vec::new();
+    for c in p.to_str().unwrap_or_default().split('/') {
+        match c {
+            "" | "." => {}
+            ".." => {
+                parts.pop();
+            }
+            c => parts.push(c),
+        }
+    }
+    parts.join("/")
 }

@@ -363,7 +363,7 @@ impl Reader {
                 Some(v) => return Err(r.invalid(tex, attr, value::show(&v), "expected float4")),
             })
         };
-        let file = match self.node_value(tex, "inputs:file")? {
+        let (file, bytes) = match self.node_value(tex, "inputs:file")? {
             Some(Value::AssetPath(a)) if !a.as_str().is_empty() => {
                 self.asset_file(tex, "inputs:file", &a)
             }
@@ -476,6 +476,7 @@ impl Reader {
                 filter: FilterDef::Bilinear,
                 wrap,
                 pixels: None,
+                bytes,
             });
         Ok((Some(name), [scale[0], scale[1], scale[2]]))
     }
