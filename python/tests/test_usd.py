@@ -467,9 +467,11 @@ def test_the_lookdev_stage_loads_without_warnings():
     assert r.beauty.mean() > 0.05
 
 
-def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path):
+@pytest.mark.parametrize("uv", ["st", "UVMap"])
+def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path, uv):
     """USD's st has (0, 0) at the image's bottom left: a quad whose st spans [0, 1]² shows the
-    image upright. Its JSON twin has illum's top-left uvs."""
+    image upright. Its JSON twin has illum's top-left uvs. The primvar is the one the
+    material's primvar reader names."""
     px = np.zeros((8, 8, 3), dtype=np.float32)
     px[:4] = (0.9, 0.05, 0.05)  # top half red
     px[4:] = (0.05, 0.9, 0.05)  # bottom half green
@@ -480,7 +482,7 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path):
     camera(s, (0, 0, 4), size=(32, 32))
     quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
     m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
-    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar(uv, Sdf.ValueTypeNames.TexCoord2fArray,
                                               UsdGeom.Tokens.faceVarying)
     st.Set([(0, 0), (1, 0), (1, 1), (0, 1)])
     mat = UsdShade.Material.Define(s, "/Looks/Card")
@@ -493,7 +495,7 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path):
     tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("clamp")
     reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
     reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set(uv)
     tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
         reader.ConnectableAPI(), "result")
     ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(

@@ -1,4 +1,4 @@
-//! UsdGeom gprims: `Mesh` (polygons triangulated as fans, normals and `primvars:st` at any
+//! UsdGeom gprims: `Mesh` (polygons triangulated as fans, normals and texture coordinates at any
 //! interpolation, indexed or not), `Sphere` (illum's exact sphere), `Cube` and `Plane` (their
 //! exact triangles). Meshes keep their local points and carry the world transform.
 
@@ -58,10 +58,15 @@ impl Reader {
         &mut self,
         prim: &sdf::Path,
         at: &Place,
-        build: impl FnOnce(&mut Self) -> Result<Option<MeshDef>>,
+        build: impl FnOnce(&mut Self, &str) -> Result<Option<MeshDef>>,
     ) -> Result<()> {
         let double_sided = self.boolean(prim, "doubleSided", false)?;
         let material = self.material(prim, double_sided)?;
+        let texcoords = self
+            .texcoord_of
+            .get(&material)
+            .cloned()
+            .unwrap_or_else(|| "st".to_string());
         let transform = Some(TransformDef {
             matrix: Some(row_major(at.world)),
             ..Default::default()
@@ -77,7 +82,7 @@ impl Reader {
             self.out.shapes.0.insert(name, shape);
             return Ok(());
         }
-        let Some(mesh) = build(self)? else {
+        let Some(mesh) = build(self, &texcoords)? else {
             return Ok(());
         };
         let shape = ShapeDef {
@@ -96,7 +101,7 @@ impl Reader {
     /// The gprim at `prim` of a supported kind, placed at `at`; false for another kind.
     pub(super) fn gprim(&mut self, prim: &sdf::Path, kind: &str, at: &Place) -> Result<bool> {
         match kind {
-            "Mesh" => self.mesh_shape(prim, at, |r| r.read_mesh(prim))?,
+            "Mesh" => self.mesh_shape(prim, at, |r, st| r.read_mesh(prim, st))?,
             "Sphere" => self.sphere(prim, at)?,
             "Cube" => self.cube(prim, at)?,
             "Plane" => self.plane(prim, at)?,
@@ -118,7 +123,8 @@ impl Reader {
     }
 
     /// A Mesh prim's triangles, or None (with a warning) when it has none.
-    fn read_mesh(&mut self, prim: &sdf::Path) -> Result<Option<MeshDef>> {
+    /// `st` names the texture-coordinate primvar its material reads (`primvars:<st>`).
+    fn read_mesh(&mut self, prim: &sdf::Path, st: &str) -> Result<Option<MeshDef>> {
         let points = self.vec3s(prim, "points")?;
         let counts = self.ints(prim, "faceVertexCounts")?;
         let indices = self.ints(prim, "faceVertexIndices")?;
@@ -178,7 +184,7 @@ impl Reader {
             Some(n) => Some(n),
             None => self.primvar3(prim, "normals", faces, n_points, n_corners)?,
         };
-        let st = self.primvar2(prim, "primvars:st", faces, n_points, n_corners)?;
+        let st = self.primvar2(prim, &format!("primvars:{st}"), faces, n_points, n_corners)?;
         let per_point = |i: Option<Interp>| i.is_none_or(|i| i == Interp::Vertex);
         let shared = per_point(normals.as_ref().map(|n| n.interp))
             && per_point(st.as_ref().map(|s| s.interp));
@@ -456,7 +462,7 @@ impl Reader {
             normals: Some(normals),
             ..Default::default()
         };
-        self.mesh_shape(prim, at, |_| Ok(Some(mesh)))
+        self.mesh_shape(prim, at, |_, _| Ok(Some(mesh)))
     }
 
     /// A `width` × `length` rectangle facing +`axis`: 2 triangles.
@@ -486,6 +492,6 @@ impl Reader {
             normals: Some(vec![n.to_array(); 4]),
             ..Default::default()
         };
-        self.mesh_shape(prim, at, |_| Ok(Some(mesh)))
+        self.mesh_shape(prim, at, |_, _| Ok(Some(mesh)))
     }
 }

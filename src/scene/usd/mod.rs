@@ -52,6 +52,10 @@ pub(crate) struct Reader {
     materials: HashMap<String, String>,
     /// The shape that holds the mesh of each (prototype prim, material), for instances.
     instanced: HashMap<String, String>,
+    /// The texture-coordinate primvar (its name after `primvars:`) each material's textures
+    /// read; `texcoords` is the one of the material being read.
+    texcoord_of: HashMap<String, String>,
+    texcoords: Option<String>,
     cameras: Vec<sdf::Path>,
     render_settings: Vec<sdf::Path>,
 }
@@ -102,6 +106,8 @@ pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
         },
         materials: HashMap::new(),
         instanced: HashMap::new(),
+        texcoord_of: HashMap::new(),
+        texcoords: None,
         cameras: Vec::new(),
         render_settings: Vec::new(),
     };

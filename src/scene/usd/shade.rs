@@ -44,10 +44,12 @@ impl Reader {
         if let Some(name) = self.materials.get(&full_key) {
             return Ok(name.clone());
         }
+        self.texcoords = None;
         let mut def = match &bound {
             Some(m) => self.preview_surface(m)?,
             None => lambert(self.display_color(gprim)?),
         };
+        let texcoords = self.texcoords.take();
         def.two_sided = double_sided && def.emission.iter().any(|&e| e > 0.0);
         let name = if def.two_sided || !double_sided {
             full_key.clone()
@@ -56,6 +58,9 @@ impl Reader {
         };
         if !self.out.materials.0.contains_key(&name) {
             self.out.materials.0.insert(name.clone(), def);
+        }
+        if let Some(t) = texcoords {
+            self.texcoord_of.insert(name.clone(), t);
         }
         self.materials.insert(full_key, name.clone());
         Ok(name)
@@ -439,22 +444,33 @@ impl Reader {
                     tex,
                     "inputs:st",
                     "not connected",
-                    "must connect to a UsdPrimvarReader_float2 of st",
+                    "must connect to a UsdPrimvarReader_float2 (texture coordinates)",
                 ));
             }
         };
         let id = self.shader_id(&reader)?;
         let var = self.node_token(&reader, "inputs:varname", "")?;
-        if id != "UsdPrimvarReader_float2" || var != "st" {
+        if id != "UsdPrimvarReader_float2" || var.is_empty() {
             return Err(self.unsupported(
                 tex,
                 "inputs:st",
                 format!(
-                    "connected to {} ({id:?} of {var:?}): illum maps textures by the mesh's \
-                     primvars:st, through a UsdPrimvarReader_float2 of \"st\"",
+                    "connected to {} ({id:?} of {var:?}): illum maps textures by a mesh \
+                     primvar, through a UsdPrimvarReader_float2 that names it",
                     reader.as_str()
                 ),
             ));
+        }
+        // One set of texture coordinates per material: the meshes give that primvar.
+        match &self.texcoords {
+            Some(other) if *other != var => {
+                return Err(self.unsupported(
+                    &reader,
+                    "inputs:varname",
+                    format!("reads {var:?}, another texture of the material {other:?}: illum gives a mesh one set of texture coordinates"),
+                ));
+            }
+            _ => self.texcoords = Some(var),
         }
         let name = format!(
             "{}{}",
