@@ -118,15 +118,8 @@ impl RenderArgs {
 
     /// The render settings for `scene`, and the flag that stops the render.
     fn settings(&self, scene: &illum::scene::Scene) -> PyResult<(RenderSettings, Arc<AtomicBool>)> {
-        let name = self
-            .integrator
-            .clone()
-            .or_else(|| scene.integrator.name.clone())
-            .unwrap_or_else(|| illum::integrators::default_integrator().name().to_string());
-        let mut p = illum::integrators::scene_params(&name, scene);
-        for (k, v, origin) in &self.params {
-            p.set(k, v, origin);
-        }
+        let name = illum::integrators::chosen(self.integrator.as_deref(), scene);
+        let p = params_for(&name, scene, &self.params);
         let integrator =
             illum::integrators::create(&name, &p).map_err(|e| err(anyhow::anyhow!(e)))?;
         let trace = trace_mode(&self.trace)?;
@@ -151,6 +144,33 @@ impl RenderArgs {
 /// What a render with the GIL released gives back: its output, the device's name, its settings
 /// and whether KeyboardInterrupt stopped it.
 type Detached = (illum::Result<RenderOutput>, String, RenderSettings, bool);
+
+/// Integrator `kind`'s parameters: the scene's, then the keyword parameters over them.
+fn params_for(
+    kind: &str,
+    scene: &illum::scene::Scene,
+    kw: &[(String, String, String)],
+) -> illum::render::Params {
+    let mut p = illum::integrators::scene_params(kind, scene);
+    for (k, v, origin) in kw {
+        p.set(k, v, origin);
+    }
+    p
+}
+
+/// `scene` at the resolution `width`/`height` ask for (as `--width`/`--height`).
+fn at_resolution(
+    scene: &illum::scene::Scene,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> PyResult<illum::scene::Scene> {
+    let mut scene = scene.clone();
+    scene
+        .camera
+        .set_resolution(width, height)
+        .map_err(|e| err(anyhow::anyhow!(e)))?;
+    Ok(scene)
+}
 
 /// Runs `render` with the GIL released and Ctrl-C setting `cancel`.
 fn detached(
@@ -319,11 +339,7 @@ impl Scene {
         crop: Option<(u32, u32, u32, u32)>,
         params: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Render> {
-        let mut scene = self.inner.clone();
-        scene
-            .camera
-            .set_resolution(width, height)
-            .map_err(|e| err(anyhow::anyhow!(e)))?;
+        let scene = at_resolution(&self.inner, width, height)?;
         let args = RenderArgs {
             spp,
             time,

@@ -211,10 +211,7 @@ pub struct IntegratorArgs {
 impl IntegratorArgs {
     /// The integrator's name: this option, else the scene's, else the default.
     pub fn name(&self, scene: &Scene) -> String {
-        self.integrator
-            .clone()
-            .or_else(|| scene.integrator.name.clone())
-            .unwrap_or_else(|| crate::integrators::default_integrator().name().to_string())
+        crate::integrators::chosen(self.integrator.as_deref(), scene)
     }
 
     /// The parameters for integrator `name`: the scene's (when its section names that integrator

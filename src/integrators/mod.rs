@@ -60,6 +60,14 @@ pub fn create(name: &str, params: &Params) -> Result<Arc<dyn Integrator>, String
     (r.create)(params)
 }
 
+/// The integrator a render uses: the one the caller names, else the scene's, else the default.
+pub fn chosen(given: Option<&str>, scene: &crate::scene::Scene) -> String {
+    given
+        .map(str::to_string)
+        .or_else(|| scene.integrator.name.clone())
+        .unwrap_or_else(|| default_integrator().name().to_string())
+}
+
 /// The parameters a scene's `integrator` section gives integrator `name` (none when the section
 /// names another one), each named by its origin: what every front end (the CLI, Python) starts
 /// from before its own options.

@@ -19,15 +19,7 @@ impl Reader {
         let mut resolution = None;
         let mut policy = "expandAperture".to_string();
         if let Some(s) = &settings {
-            let rel = s
-                .append_property("camera")
-                .map_err(|e| self.read_error(s, "camera", e))?;
-            let targets = self
-                .stage
-                .relationship(rel)
-                .targets()
-                .map_err(|e| self.read_error(s, "camera", e))?;
-            camera = targets.first().cloned();
+            camera = self.targets(s, "camera")?.first().cloned();
             if let Some(v) = self.attr(s, "resolution")? {
                 let r = value::vec2(&v).ok_or_else(|| {
                     self.invalid(s, "resolution", value::show(&v), "expected int2")

@@ -156,20 +156,7 @@ impl Reader {
                 &format!("faceVertexCounts adds up to {total}"),
             ));
         }
-        if let Some(i) = indices
-            .iter()
-            .find(|&&i| i < 0 || i as usize >= points.len())
-        {
-            return Err(self.invalid(
-                prim,
-                "faceVertexIndices",
-                i,
-                &format!(
-                    "each index must be in 0..{} (the number of points)",
-                    points.len()
-                ),
-            ));
-        }
+        self.check_indices(prim, "faceVertexIndices", &indices, points.len(), "points")?;
         if self.token(prim, "subdivisionScheme", "catmullClark")? != "none" {
             self.warn(
                 prim,
@@ -180,11 +167,13 @@ impl Reader {
         let left = self.token(prim, "orientation", "rightHanded")? == "leftHanded";
         let faces = counts.len();
         let (n_points, n_corners) = (points.len(), indices.len());
-        let normals = match self.primvar3(prim, "primvars:normals", faces, n_points, n_corners)? {
+        let sizes = (faces, n_points, n_corners);
+        let normals = match self.primvar_n(prim, "primvars:normals", value::vec3_array, sizes)? {
             Some(n) => Some(n),
-            None => self.primvar3(prim, "normals", faces, n_points, n_corners)?,
+            None => self.primvar_n(prim, "normals", value::vec3_array, sizes)?,
         };
-        let st = self.primvar2(prim, &format!("primvars:{st}"), faces, n_points, n_corners)?;
+        let st_attr = format!("primvars:{st}");
+        let st = self.primvar_n(prim, &st_attr, value::vec2_array, sizes)?;
         let per_point = |i: Option<Interp>| i.is_none_or(|i| i == Interp::Vertex);
         let shared = per_point(normals.as_ref().map(|n| n.interp))
             && per_point(st.as_ref().map(|s| s.interp));
@@ -307,17 +296,7 @@ impl Reader {
         let values = match self.ints(prim, &index_attr)? {
             None => values,
             Some(idx) => {
-                if let Some(i) = idx.iter().find(|&&i| i < 0 || i as usize >= values.len()) {
-                    return Err(self.invalid(
-                        prim,
-                        &index_attr,
-                        i,
-                        &format!(
-                            "each index must be in 0..{} (the number of values)",
-                            values.len()
-                        ),
-                    ));
-                }
+                self.check_indices(prim, &index_attr, &idx, values.len(), "values")?;
                 idx.iter().map(|&i| values[i as usize]).collect()
             }
         };
@@ -338,56 +317,25 @@ impl Reader {
         Ok(Primvar { values, interp })
     }
 
-    fn primvar3(
+    /// The primvar `prim.attr` with values of N numbers (`parse` reads them), finite.
+    fn primvar_n<const N: usize>(
         &mut self,
         prim: &sdf::Path,
         attr: &str,
-        faces: usize,
-        points: usize,
-        corners: usize,
-    ) -> Result<Option<Primvar<[f64; 3]>>> {
-        let Some(values) = self.vec3s(prim, attr)? else {
-            return Ok(None);
-        };
-        if let Some(n) = values.iter().find(|n| !n.iter().all(|c| c.is_finite())) {
-            return Err(self.invalid(prim, attr, format!("{n:?}"), "must be finite"));
-        }
-        Ok(Some(self.primvar(
-            prim,
-            attr,
-            values,
-            (faces, points, corners),
-        )?))
-    }
-
-    fn primvar2(
-        &mut self,
-        prim: &sdf::Path,
-        attr: &str,
-        faces: usize,
-        points: usize,
-        corners: usize,
-    ) -> Result<Option<Primvar<[f64; 2]>>> {
+        parse: fn(&sdf::Value) -> Option<Vec<[f64; N]>>,
+        sizes: (usize, usize, usize),
+    ) -> Result<Option<Primvar<[f64; N]>>> {
         let Some(v) = self.attr(prim, attr)? else {
             return Ok(None);
         };
-        let values = value::vec2_array(&v).ok_or_else(|| {
-            self.invalid(
-                prim,
-                attr,
-                value::show(&v),
-                "expected an array of 2-vectors",
-            )
-        })?;
+        let Some(values) = parse(&v) else {
+            let expected = format!("expected an array of {N}-vectors");
+            return Err(self.invalid(prim, attr, value::show(&v), &expected));
+        };
         if let Some(n) = values.iter().find(|n| !n.iter().all(|c| c.is_finite())) {
             return Err(self.invalid(prim, attr, format!("{n:?}"), "must be finite"));
         }
-        Ok(Some(self.primvar(
-            prim,
-            attr,
-            values,
-            (faces, points, corners),
-        )?))
+        Ok(Some(self.primvar(prim, attr, values, sizes)?))
     }
 
     /// The uniform scale of a similarity transform (rotation, uniform scale, translation), or an

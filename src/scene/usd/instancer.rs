@@ -20,14 +20,7 @@ impl Reader {
     pub(super) fn point_instancer(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
         // The prototypes are read from here, not as prims of their own.
         self.pruned.insert(prim.clone());
-        let rel = prim
-            .append_property("prototypes")
-            .map_err(|e| self.read_error(prim, "prototypes", e))?;
-        let protos = self
-            .stage
-            .relationship(rel)
-            .targets()
-            .map_err(|e| self.read_error(prim, "prototypes", e))?;
+        let protos = self.targets(prim, "prototypes")?;
         let (Some(indices), Some(positions)) = (
             self.ints(prim, "protoIndices")?,
             self.vec3s(prim, "positions")?,
@@ -48,20 +41,7 @@ impl Reader {
                 &format!("protoIndices has {n}"),
             ));
         }
-        if let Some(i) = indices
-            .iter()
-            .find(|&&i| i < 0 || i as usize >= protos.len())
-        {
-            return Err(self.invalid(
-                prim,
-                "protoIndices",
-                i,
-                &format!(
-                    "each index must be in 0..{} (the number of prototypes)",
-                    protos.len()
-                ),
-            ));
-        }
+        self.check_indices(prim, "protoIndices", &indices, protos.len(), "prototypes")?;
         let orientations = self.quats(prim, n)?;
         let scales = match self.vec3s(prim, "scales")? {
             Some(s) if s.len() != n => {

@@ -4,8 +4,7 @@
 
 use super::{Reader, Result, value};
 use crate::scene::format::{
-    DiskDef, DomeConventionDef, DomeDef, FilterDef, LightDef, RectDef, SphereDef, SunDef,
-    TextureDef, WrapDef,
+    DiskDef, DomeConventionDef, DomeDef, LightDef, RectDef, SphereDef, SunDef, WrapDef,
 };
 use glam::{DMat4, DVec3};
 use openusd::sdf::{self, Value};
@@ -239,15 +238,7 @@ impl Reader {
                 );
             }
         }
-        let rel = prim
-            .append_property("light:filters")
-            .map_err(|e| self.read_error(prim, "light:filters", e))?;
-        let filters = self
-            .stage
-            .relationship(rel)
-            .targets()
-            .map_err(|e| self.read_error(prim, "light:filters", e))?;
-        if !filters.is_empty() {
+        if !self.targets(prim, "light:filters")?.is_empty() {
             self.warn(prim, "light:filters", "light filters are not rendered");
         }
         Ok(())
@@ -267,17 +258,7 @@ impl Reader {
         }
         let (file, bytes) = self.asset_file(prim, attr, a);
         let name = format!("{}.{attr}", prim.as_str());
-        self.out.textures.0.insert(
-            name.clone(),
-            TextureDef {
-                file,
-                srgb: None,
-                filter: FilterDef::Bilinear,
-                wrap: WrapDef::Repeat,
-                pixels: None,
-                bytes,
-            },
-        );
+        self.add_texture(&name, file, bytes, None, WrapDef::Repeat);
         Ok(Some(name))
     }
 

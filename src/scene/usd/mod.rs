@@ -14,7 +14,7 @@ mod value;
 mod xform;
 
 use super::error::{SceneError, io_message};
-use super::format::{CameraDef, NamedMap, SceneFile};
+use super::format::{CameraDef, FilterDef, NamedMap, SceneFile, TextureDef, WrapDef};
 use glam::DMat4;
 use openusd::sdf::{self, Value};
 use openusd::usd;
@@ -304,6 +304,60 @@ impl Reader {
             None => authored.to_string(),
         };
         (file, None)
+    }
+
+    /// A bilinear texture of the scene (the first of its name stays).
+    fn add_texture(
+        &mut self,
+        name: &str,
+        file: String,
+        bytes: Option<Vec<u8>>,
+        srgb: Option<bool>,
+        wrap: WrapDef,
+    ) {
+        self.out
+            .textures
+            .0
+            .entry(name.to_string())
+            .or_insert(TextureDef {
+                file,
+                srgb,
+                filter: FilterDef::Bilinear,
+                wrap,
+                pixels: None,
+                bytes,
+            });
+    }
+
+    /// The targets of the relationship `prim.rel`.
+    fn targets(&self, prim: &sdf::Path, rel: &str) -> Result<Vec<sdf::Path>> {
+        let path = prim
+            .append_property(rel)
+            .map_err(|e| self.read_error(prim, rel, e))?;
+        self.stage
+            .relationship(path)
+            .targets()
+            .map_err(|e| self.read_error(prim, rel, e))
+    }
+
+    /// That every index of `prim.attr` is in 0..`len` (`what`: the `len` things indexed).
+    fn check_indices(
+        &self,
+        prim: &sdf::Path,
+        attr: &str,
+        idx: &[i64],
+        len: usize,
+        what: &str,
+    ) -> Result<()> {
+        match idx.iter().find(|&&i| i < 0 || i as usize >= len) {
+            Some(i) => Err(self.invalid(
+                prim,
+                attr,
+                i,
+                &format!("each index must be in 0..{len} (the number of {what})"),
+            )),
+            None => Ok(()),
+        }
     }
 
     /// Whether `prim.attr` has an opinion (a default or time samples).

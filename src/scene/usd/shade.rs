@@ -6,9 +6,7 @@
 //! diffuseColor by metallic (the specular workflow: f0 = specularColor, diffuse = diffuseColor).
 
 use super::{Reader, Result, value};
-use crate::scene::format::{
-    FilterDef, FresnelDef, LobeDef, MaterialDef, ModelDef, NumOrArray, TextureDef, WrapDef,
-};
+use crate::scene::format::{FresnelDef, LobeDef, MaterialDef, ModelDef, NumOrArray, WrapDef};
 use openusd::schemas::shade::MaterialBindingAPI;
 use openusd::sdf::{self, Value};
 
@@ -33,12 +31,14 @@ impl Reader {
     /// emissive material emit from both faces (`doubleSided`).
     pub(super) fn material(&mut self, gprim: &sdf::Path, double_sided: bool) -> Result<String> {
         let bound = self.bound_material(gprim)?;
-        let key = match &bound {
-            Some(m) => m.as_str().to_string(),
-            None => {
-                let c = self.display_color(gprim)?;
-                format!("displayColor {c:?}")
-            }
+        // Unbound: the display colour, read once (it may warn).
+        let color = match &bound {
+            Some(_) => None,
+            None => Some(self.display_color(gprim)?),
+        };
+        let key = match (&bound, color) {
+            (Some(m), _) => m.as_str().to_string(),
+            (None, c) => format!("displayColor {:?}", c.unwrap_or(FALLBACK_GREY)),
         };
         let full_key = format!("{key}{}", if double_sided { " (double-sided)" } else { "" });
         if let Some(name) = self.materials.get(&full_key) {
@@ -47,7 +47,7 @@ impl Reader {
         self.texcoords = None;
         let mut def = match &bound {
             Some(m) => self.preview_surface(m)?,
-            None => lambert(self.display_color(gprim)?),
+            None => lambert(color.unwrap_or(FALLBACK_GREY)),
         };
         let texcoords = self.texcoords.take();
         def.two_sided = double_sided && def.emission.iter().any(|&e| e > 0.0);
@@ -482,18 +482,7 @@ impl Reader {
             }
         );
         let wrap = wraps[0];
-        self.out
-            .textures
-            .0
-            .entry(name.clone())
-            .or_insert(TextureDef {
-                file,
-                srgb,
-                filter: FilterDef::Bilinear,
-                wrap,
-                pixels: None,
-                bytes,
-            });
+        self.add_texture(&name, file, bytes, srgb, wrap);
         Ok((Some(name), [scale[0], scale[1], scale[2]]))
     }
 }
@@ -501,11 +490,6 @@ impl Reader {
 fn lambert(diffuse: [f64; 3]) -> MaterialDef {
     MaterialDef {
         diffuse,
-        diffuse_texture: None,
-        specular: Vec::new(),
-        emission: [0.0; 3],
-        emission_texture: None,
-        two_sided: false,
-        tangent: None,
+        ..Default::default()
     }
 }
