@@ -131,7 +131,8 @@ def compare(
     full-nocaustics) and `samples` ("L/B", "L/B/dmis", "L/B/nodmis") as the CLI's options;
     `reference` an EXR's path or a (height, width, 3) array (else the relMSE is estimated from
     the half-buffers); `output=PREFIX` writes PREFIX-<name>.exr, PREFIX-error.png and
-    PREFIX-strip.png. Ctrl-C raises KeyboardInterrupt."""
+    PREFIX-strip.png (each EXR as its run ends). Ctrl-C raises KeyboardInterrupt after writing
+    the EXR of the run it stopped."""
 
 def load(path: str | PathLike[str]) -> Scene:
     """Loads and validates a scene file: JSON, or a USD stage (.usd, .usda, .usdc, .usdz)."""

@@ -2,7 +2,10 @@
 //! and builds the table, curves and strip; here each run renders with the GIL released and
 //! comes back as a `Render`.
 
-use super::{IllumError, Render, RenderArgs, Scene, context, detached, err, trace_mode};
+use super::{
+    IllumError, Render, RenderArgs, Scene, at_resolution, context, detached, err, params_for,
+    trace_mode,
+};
 use illum::compare::{Budget, Comparison as Rendered, Spec};
 use numpy::{PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyKeyboardInterrupt;
@@ -112,8 +115,9 @@ fn outputs(prefix: &Path, names: &[String]) -> (Vec<PathBuf>, PathBuf, PathBuf) 
 /// `--integrators` and `--samples` (lists or comma-separated strings), `**params` as `--param
 /// NAME=VALUE`, `width`/`height` as `--width`/`--height`. `reference` is an EXR's path or an array (height, width, 3): the table's relMSE
 /// is then measured, else estimated from the half-buffers. `output=PREFIX` writes what the CLI
-/// writes: PREFIX-<name>.exr, PREFIX-error.png and PREFIX-strip.png. Ctrl-C raises
-/// KeyboardInterrupt (a run cut short had less time than the others: no fair comparison).
+/// writes: PREFIX-<name>.exr (each as its run ends), PREFIX-error.png and PREFIX-strip.png.
+/// Ctrl-C raises KeyboardInterrupt (a run cut short had less time than the others: no fair
+/// comparison), after writing the EXR of the run it stopped.
 #[pyfunction]
 #[pyo3(signature = (scene, time=5.0, techniques=None, integrators=None, samples=None,
                     reference=None, seed=0, integrator=None, width=None, height=None,
@@ -136,12 +140,7 @@ pub fn compare(
     output: Option<PathBuf>,
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Comparison> {
-    let mut scene = scene.inner.clone();
-    scene
-        .camera
-        .set_resolution(width, height)
-        .map_err(|e| err(anyhow::anyhow!(e)))?;
-    let scene = &scene;
+    let scene = &at_resolution(&scene.inner, width, height)?;
     let invalid = |arg: &str, e: String| IllumError::new_err(format!("{arg}=: {e}"));
     let techniques = match techniques {
         None => None,
@@ -157,20 +156,12 @@ pub fn compare(
         .map(|s| illum::compare::parse_samples(s).map_err(|e| invalid("samples", e)))
         .collect::<PyResult<Vec<_>>>()?;
     let kw = RenderArgs::params(params, "compare")?;
-    let with_kw = |kind: &str| {
-        let mut p = illum::integrators::scene_params(kind, scene);
-        for (k, v, origin) in &kw {
-            p.set(k, v, origin);
-        }
-        Ok(p)
-    };
+    let with_kw = |kind: &str| Ok(params_for(kind, scene, &kw));
     let spec = Spec {
         techniques,
         integrators: names("integrators", integrators)?,
         samples,
-        default_integrator: integrator
-            .or_else(|| scene.integrator.name.clone())
-            .unwrap_or_else(|| illum::integrators::default_integrator().name().to_string()),
+        default_integrator: illum::integrators::chosen(integrator.as_deref(), scene),
         params: &with_kw,
         arg: |n| format!("{n}="),
     };
@@ -212,7 +203,7 @@ pub fn compare(
         time,
     };
     let mut metas = Vec::new();
-    for run in &runs {
+    for (k, run) in runs.iter().enumerate() {
         let (out, device_name, settings, stopped) = detached(
             py,
             ctx.clone(),
@@ -221,20 +212,29 @@ pub fn compare(
             |r, s, p| r.render(scene, s, p),
         );
         let out = out.map_err(err)?;
-        if stopped || out.stats.interrupted {
-            return Err(PyKeyboardInterrupt::new_err(format!(
-                "illum.compare: stopped during {} after {} spp; no comparison",
-                run.name, out.stats.spp
-            )));
-        }
-        metas.push(illum::cli::image_metadata(&out, &settings, &device_name));
-        rendered.runs.push((run.name.clone(), out));
-    }
-    if let Some((exrs, plot, strip)) = &files {
-        for ((_, out), (exr, meta)) in rendered.runs.iter().zip(exrs.iter().zip(&metas)) {
-            illum::output::write_exr(exr, &out.film, meta)
+        let meta = illum::cli::image_metadata(&out, &settings, &device_name);
+        // Each run's EXR as soon as it is rendered, as `illum compare` writes them: an
+        // interrupted comparison keeps the images done.
+        let exr = files.as_ref().map(|(exrs, ..)| &exrs[k]);
+        if let Some(exr) = exr {
+            illum::output::write_exr(exr, &out.film, &meta)
                 .map_err(|e| err(illum::Error::from(e)))?;
         }
+        if stopped || out.stats.interrupted {
+            return Err(PyKeyboardInterrupt::new_err(format!(
+                "illum.compare: stopped during {} after {} spp; no comparison{}",
+                run.name,
+                out.stats.spp,
+                exr.map_or(String::new(), |e| format!(
+                    " (wrote {} and the runs before it)",
+                    e.display()
+                ))
+            )));
+        }
+        metas.push(meta);
+        rendered.runs.push((run.name.clone(), out));
+    }
+    if let Some((_, plot, strip)) = &files {
         rendered.write_plot(plot).map_err(err)?;
         rendered
             .write_strip(strip, reference.as_deref())

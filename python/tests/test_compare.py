@@ -111,14 +111,15 @@ def test_bad_input_raises_the_message_the_cli_prints(tmp_path):
         illum.compare(scene, techniques="mis", reference=reference, output=tmp_path / "c")
 
 
-def test_ctrl_c_refuses_an_unfair_comparison():
+def test_ctrl_c_refuses_an_unfair_comparison_and_keeps_the_image(tmp_path):
+    prefix = tmp_path / "c"
     script = textwrap.dedent(f"""
         import os, signal, threading
         import illum
         s = illum.Scene.from_dict({SCENE!r})
         threading.Timer(1.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
         try:
-            illum.compare(s, time=60, techniques="mis")
+            illum.compare(s, time=60, techniques="mis", output={str(prefix)!r})
             print("finished")
         except KeyboardInterrupt as e:
             print("interrupted:", e)
@@ -126,3 +127,8 @@ def test_ctrl_c_refuses_an_unfair_comparison():
     p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert "interrupted: illum.compare: stopped during mis" in p.stdout, p.stdout
+    # The samples done are kept, as `illum compare` keeps them; no table, curves or strip.
+    assert f"wrote {prefix}-mis.exr" in p.stdout, p.stdout
+    exr = channels(tmp_path / "c-mis.exr")
+    assert np.isfinite(exr["R"]).all() and exr["R"].mean() > 0
+    assert not (tmp_path / "c-error.png").exists()
