@@ -212,7 +212,7 @@ pub fn compare(
             |r, s, p| r.render(scene, s, p),
         );
         let out = out.map_err(err)?;
-        let meta = illum::cli::image_metadata(&out, &settings, &device_name);
+        let meta = illum::output::image_metadata(&out, &settings, &device_name);
         // Each run's EXR as soon as it is rendered, as `illum compare` writes them: an
         // interrupted comparison keeps the images done.
         let exr = files.as_ref().map(|(exrs, ..)| &exrs[k]);

@@ -214,7 +214,7 @@ fn run(
 ) -> PyResult<Render> {
     let (out, device_name, settings, stopped) = detached(py, ctx, settings, cancel, render);
     let out = out.map_err(err)?;
-    let meta = illum::cli::image_metadata(&out, &settings, &device_name);
+    let meta = illum::output::image_metadata(&out, &settings, &device_name);
     Render::new(py, out, meta, stopped)
 }
 

@@ -2,9 +2,10 @@
 //! with their error table, error-against-time curves and an image strip with error heat-maps.
 
 use super::render::{announce_compiles, progress_bar};
-use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
+use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
 use crate::compare::{Budget, Comparison, Run, Samples, Spec, parse_samples};
 use crate::integrators::Technique;
+use crate::output::image_metadata;
 use crate::output::write_exr;
 use crate::render::{RenderOutput, RenderSettings, Renderer};
 use crate::trace::TraceMode;

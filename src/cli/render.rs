@@ -1,7 +1,8 @@
 //! `illum render`: one scene to EXR (and PNG), with optional error reports.
 
-use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, image_metadata, signal};
+use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
 use crate::film::Window;
+use crate::output::image_metadata;
 use crate::output::{write_exr, write_png};
 use crate::render::{RenderSettings, Renderer};
 use crate::trace::TraceMode;

@@ -6,6 +6,7 @@
 //! display-referred preview of the beauty only.
 
 mod file;
+mod metadata;
 mod openexr;
 mod png;
 
@@ -15,6 +16,7 @@ pub use file::{
     abort_writes, check_distinct, check_writable, resolve_target, same_file, temp_path_for,
     write_atomically,
 };
+pub use metadata::image_metadata;
 pub use openexr::{ExrImage, read_exr, read_reference, write_exr};
 pub use png::write_png;
 
