@@ -124,3 +124,63 @@ fn a_moved_camera_renders_the_prepared_scene_as_a_fresh_one() {
     );
     assert_no_validation_messages(&ctx);
 }
+
+/// A progressive render (`illum view`'s) stepped by uneven steps across a block boundary, moved
+/// away and back in between, holds the blocking render's image bit for bit at every count: at
+/// 100 of 300 samples the render at --spp 100, at the end the render at --spp 300 (film and exact
+/// sums).
+#[test]
+fn a_progressive_render_is_the_blocking_render_at_every_count() {
+    let ctx = context();
+    let scene = scene(SCENE);
+    let r = Renderer::new(ctx.clone());
+    let prepared = r.prepare(&scene, trace_mode()).unwrap();
+    let blocking = |spp| {
+        r.render_prepared(
+            &prepared,
+            &scene.camera,
+            &settings(spp),
+            &[0],
+            &mut |_, _| {},
+        )
+        .unwrap()
+        .pop()
+        .unwrap()
+    };
+    let (at_100, at_300) = (blocking(100), blocking(300));
+    let mut p = r
+        .progressive(&prepared, &scene.camera, &settings(300))
+        .unwrap();
+    let mut away = scene.camera.clone();
+    away.position.x += 1.0;
+    p.step(5).unwrap();
+    p.restart(&away).unwrap();
+    p.step(3).unwrap();
+    p.restart(&scene.camera).unwrap();
+    for step in [1, 3, 7, 64, 25] {
+        p.step(step).unwrap();
+    }
+    assert_eq!(p.done(), 100);
+    let mid = p.output().unwrap();
+    assert_eq!(mid.film, at_100.film, "the image at 100 samples");
+    assert_eq!(mid.stats.spp, 100);
+    // The peek shown between steps is the same image, in f64.
+    let peek = p.peek().unwrap();
+    let b = illum::layout::FilmPixel::BEAUTY;
+    for (i, px) in at_100.film.beauty.iter().enumerate() {
+        let mean = peek.channel(i, b) / 100.0;
+        assert!(
+            (mean - f64::from(px[0])).abs() <= 1e-6 * mean.abs().max(1.0),
+            "pixel {i}"
+        );
+    }
+    while !p.finished() {
+        p.step(37).unwrap();
+    }
+    let end = p.output().unwrap();
+    assert_eq!(end.stats.spp, 300);
+    assert!(!end.stats.interrupted);
+    assert_eq!(end.film, at_300.film, "the image at 300 samples");
+    assert_eq!(end.job, at_300.job, "the exact sums at 300 samples");
+    assert_no_validation_messages(&ctx);
+}

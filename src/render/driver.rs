@@ -5,6 +5,7 @@
 
 use super::{Integrator, IntegratorPasses, PreparedScene, RenderSettings, Schedule};
 use crate::error::{Error, Result};
+use crate::film::FILM_BLOCK;
 use crate::film::{self, AOV_CHANNELS, Window};
 use crate::layout::*;
 use crate::scene::Camera;
@@ -211,6 +212,174 @@ impl FilmBuffers {
     }
 }
 
+/// What a blocking render sets up once for all its seeds: the integrator's kernels and frame
+/// constants, the device film, the timer and adaptive sampling's buffers.
+pub struct Run {
+    pub setup: Setup,
+    frame: Buffer,
+    pub film: FilmBuffers,
+    timer: Option<crate::vk::GpuTimer>,
+    /// With adaptive sampling: Frame.pixel_ends, Frame.pixel_order and the pilot's window.
+    adaptive: Option<(Buffer, Buffer, Window)>,
+    pub warmup_seconds: f64,
+    per_dispatch: u32,
+    loop_limited: bool,
+    range: (u32, u32),
+    window: Window,
+    width: u32,
+    height: u32,
+}
+
+impl Run {
+    /// Sets up a render of `prepared` through `camera` with `settings` (checked here, with the
+    /// host memory the films of `seeds` seeds need).
+    pub fn new(
+        renderer: &super::Renderer,
+        prepared: &PreparedScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        seeds: usize,
+    ) -> Result<Run> {
+        let ctx = renderer.context();
+        let (w, h) = (camera.width, camera.height);
+        settings.check(w, h)?;
+        let (range, window) = settings.job(w, h)?;
+        check_trace(prepared, settings.trace)?;
+        check_memory(
+            settings,
+            window,
+            settings.integrator.aov_planes().len(),
+            seeds,
+        )?;
+        let mut setup = Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
+        // Adaptive sampling: each pixel's end sample (all of them until the counts are
+        // decided) and the order in which the dispatches take the pixels.
+        let adaptive = match settings.adaptive {
+            Some(a) => {
+                let all = vec![u32::MAX; w as usize * h as usize];
+                let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+                let ends = ctx.upload("pixel ends", &all, usage)?;
+                let order = ctx.upload("pixel order", &all, usage)?;
+                setup.frame.pixel_ends = ends.address;
+                setup.frame.pixel_order = order.address;
+                Some((ends, order, super::adaptive::pilot_window(&a, window, w, h)))
+            }
+            None => None,
+        };
+        let frame = ctx.upload(
+            "frame",
+            std::slice::from_ref(&setup.frame),
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        let film = FilmBuffers::new(
+            ctx,
+            "film",
+            u64::from(w) * u64::from(h),
+            setup.aov_planes.len(),
+            vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+        )?;
+        film::clear(ctx, film.device())?;
+        setup.kernels.bind(&frame, &film.film, film.aovs.as_ref());
+        let timer = crate::vk::GpuTimer::new(ctx)?;
+        let warmup_seconds = setup.warm_up(ctx)?;
+        // As many samples per dispatch as the budget allows over a tile, never across a film
+        // block (src/film/mod.rs): blocks leave the device whole.
+        let tile_pixels =
+            u64::from(window.width().min(TILE)) * u64::from(window.height().min(TILE));
+        let loop_limited = renderer.loop_limited()?;
+        let per_dispatch = if loop_limited {
+            1
+        } else {
+            (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_BLOCK)) as u32
+        };
+        Ok(Run {
+            setup,
+            frame,
+            film,
+            timer,
+            adaptive,
+            warmup_seconds,
+            per_dispatch,
+            loop_limited,
+            range,
+            window,
+            width: w,
+            height: h,
+        })
+    }
+
+    /// The blocking render over the run's set-up.
+    pub fn blocking<'a>(&'a self, ctx: &'a Context, settings: &'a RenderSettings) -> Blocking<'a> {
+        Blocking {
+            ctx,
+            settings,
+            setup: &self.setup,
+            film: &self.film,
+            timer: self.timer.as_ref(),
+            width: self.width,
+            range: self.range,
+            window: self.window,
+            per_dispatch: self.per_dispatch,
+            loop_limited: self.loop_limited,
+            adaptive: self.adaptive.as_ref().map(|(e, o, pilot)| (e, o, *pilot)),
+            height: self.height,
+        }
+    }
+
+    /// Points the run at `camera` (the same resolution) and clears the film: the next seed's
+    /// render starts afresh through it.
+    pub fn set_camera(
+        &mut self,
+        ctx: &Context,
+        prepared: &PreparedScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<()> {
+        if (camera.width, camera.height) != (self.width, self.height) {
+            return Err(Error::Invalid(format!(
+                "the camera renders {}x{}, the run was set up for {}x{}",
+                camera.width, camera.height, self.width, self.height
+            )));
+        }
+        let (ends, order) = (self.setup.frame.pixel_ends, self.setup.frame.pixel_order);
+        self.setup
+            .configure(ctx, prepared, camera, settings, Schedule::Progressive)?;
+        (self.setup.frame.pixel_ends, self.setup.frame.pixel_order) = (ends, order);
+        ctx.write(&self.frame, 0, std::slice::from_ref(&self.setup.frame))?;
+        film::clear(ctx, self.film.device())
+    }
+
+    /// One seed's render as the blocking render returns it.
+    pub fn output(
+        &self,
+        prepared: &PreparedScene,
+        settings: &RenderSettings,
+        o: SeedOutput,
+        setup_seconds: f64,
+        t0: Instant,
+    ) -> super::RenderOutput {
+        let mut stats = super::RenderStats::of(prepared, &self.setup, &o);
+        stats.warmup_seconds = self.warmup_seconds;
+        stats.setup_seconds = setup_seconds;
+        stats.total_seconds = t0.elapsed().as_secs_f64();
+        super::RenderOutput {
+            stats,
+            film: o.resolved.film,
+            passes: o.passes,
+            job: super::JobSums {
+                range: o.range,
+                total_spp: settings.spp,
+                sums: o.sums,
+            },
+        }
+    }
+
+    /// Gives the kernels back to the prepared scene for later renders.
+    pub fn keep(self, prepared: &PreparedScene) {
+        self.setup.keep(prepared);
+    }
+}
+
 /// The push constants of each tile of `window` for samples [first, first + count) with `seed`,
 /// in the order they are dispatched.
 pub fn tiles(window: Window, first: u32, count: u32, seed: u64) -> Vec<PassConstants> {
@@ -278,8 +447,15 @@ pub struct Blocking<'a> {
     pub height: u32,
 }
 
-/// Where one seed's render stands.
-struct Progress {
+/// Where one seed's render stands: what [`Blocking::render_seed`] runs to the end, and what an
+/// interactive host (src/render/progressive.rs) steps through a frame at a time.
+pub struct Progress {
+    seed: u64,
+    /// The job's first sample (of its first block) and the samples it renders from there.
+    first: u32,
+    budget: u32,
+    planes: Vec<String>,
+    evaluate: bool,
     /// Samples done per pixel, from the first sample of the first block.
     done: u32,
     wall: f64,
@@ -293,6 +469,35 @@ struct Progress {
     /// Frame.pixel_order has the pixels).
     stop: Option<u32>,
     ends: Vec<u32>,
+}
+
+impl Progress {
+    /// Samples per pixel done.
+    pub fn done(&self) -> u32 {
+        self.done
+    }
+
+    /// Wall seconds of rendering so far.
+    pub fn wall(&self) -> f64 {
+        self.wall
+    }
+
+    /// The exact sums of the blocks that have left the device.
+    pub fn sums(&self) -> &film::FilmSums {
+        &self.sums
+    }
+
+    /// A copy to finish apart (a snapshot of the image so far), the render going on.
+    fn snapshot(&self) -> Progress {
+        Progress {
+            planes: self.planes.clone(),
+            sums: self.sums.clone(),
+            passes: self.passes.clone(),
+            last_resolved: None,
+            ends: self.ends.clone(),
+            ..*self
+        }
+    }
 }
 
 impl Blocking<'_> {
@@ -316,9 +521,19 @@ impl Blocking<'_> {
     /// round of dispatches. Returns the sums, the pass reports, the resolved film, the wall and
     /// device seconds, and whether the render was cancelled.
     pub fn render_seed(&self, seed: u64, progress: &mut dyn FnMut(u32, u32)) -> Result<SeedOutput> {
+        let mut p = self.start(seed)?;
+        while !p.interrupted
+            && let Some(pass) = self.plan_pass(&p)
+        {
+            self.pass(&mut p, pass, progress)?;
+        }
+        self.finish(p)
+    }
+
+    /// A seed's render before its first sample (the film cleared): with adaptive sampling, its
+    /// pilot has run and the pixels' counts are decided.
+    pub fn start(&self, seed: u64) -> Result<Progress> {
         let (first, last) = self.blocks();
-        let budget = last - first;
-        let evaluate = self.settings.evaluate_passes || self.settings.reference.is_some();
         let planes: Vec<String> = self
             .setup
             .aov_planes
@@ -326,11 +541,16 @@ impl Blocking<'_> {
             .map(|p| p.to_string())
             .collect();
         let mut p = Progress {
+            seed,
+            first,
+            budget: last - first,
+            evaluate: self.settings.evaluate_passes || self.settings.reference.is_some(),
             done: 0,
             wall: 0.0,
             device: 0.0,
             interrupted: false,
             sums: film::FilmSums::new(self.window, planes.clone()),
+            planes,
             passes: Vec::new(),
             last_resolved: None,
             stop: None,
@@ -343,27 +563,41 @@ impl Blocking<'_> {
             // The counts come from a pilot of samples of their own, left out of the image.
             let start = Instant::now();
             self.pilot(seed)?;
-            self.decide_counts(&mut p, first, &planes)?;
+            self.decide_counts(&mut p, first)?;
             film::clear(self.ctx, self.film.device())?;
             p.wall += start.elapsed().as_secs_f64();
             p.device += start.elapsed().as_secs_f64();
         }
-        while p.done < budget && !p.interrupted {
-            let Some(pass) = self.plan_pass(&p, first, budget) else {
-                break;
-            };
-            let start = Instant::now();
-            let from = first + p.done;
-            let k = self.render_pass(&mut p, seed, from, pass, budget, progress)?;
-            p.done += k;
-            let elapsed = start.elapsed().as_secs_f64();
-            p.wall += elapsed;
-            if self.timer.is_none() {
-                p.device += elapsed;
-            }
-            self.report_pass(&mut p, &planes, evaluate, first, last)?;
+        Ok(p)
+    }
+
+    /// Renders the next `pass` samples (at most those left), moving complete blocks off the
+    /// device, and reports the pass (evaluated when the settings ask).
+    pub fn pass(
+        &self,
+        p: &mut Progress,
+        pass: u32,
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<()> {
+        let pass = pass.min(p.budget - p.done);
+        if pass == 0 {
+            return Ok(());
         }
-        let end = first + p.done;
+        let start = Instant::now();
+        let from = p.first + p.done;
+        let k = self.render_pass(p, p.seed, from, pass, p.budget, progress)?;
+        p.done += k;
+        let elapsed = start.elapsed().as_secs_f64();
+        p.wall += elapsed;
+        if self.timer.is_none() {
+            p.device += elapsed;
+        }
+        self.report_pass(p)
+    }
+
+    /// The render's output after the samples done: the block in progress joins the sums.
+    pub fn finish(&self, mut p: Progress) -> Result<SeedOutput> {
+        let end = p.first + p.done;
         // Adaptive sampling stopped every pixel: none of the range is left undone.
         let stopped = p.stop.is_some_and(|s| end >= s) && !p.interrupted;
         if stopped {
@@ -373,7 +607,7 @@ impl Blocking<'_> {
             if end > 0 && block_end != end {
                 self.commit_block(&mut p, start, block_end)?;
             }
-        } else if p.done < budget {
+        } else if p.done < p.budget {
             // A time budget ended the render inside a block: keep what was rendered.
             let block =
                 film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
@@ -383,13 +617,15 @@ impl Blocking<'_> {
             Some(r) if r.spp == p.done => r,
             _ => film::resolve(
                 &p.sums.all_sums(),
-                &planes,
+                &p.planes,
                 self.window.width(),
                 self.window.height(),
                 p.done,
             ),
         };
-        if !evaluate && let Some(r) = p.passes.last_mut() {
+        if !p.evaluate
+            && let Some(r) = p.passes.last_mut()
+        {
             evaluate_pass(r, &resolved, self.settings.reference.as_deref());
         }
         let covered = if stopped {
@@ -409,13 +645,27 @@ impl Blocking<'_> {
         })
     }
 
+    /// What [`Blocking::finish`] would give now, the render going on.
+    pub fn snapshot(&self, p: &Progress) -> Result<SeedOutput> {
+        self.finish(p.snapshot())
+    }
+
+    /// The float32 sums of the block in progress (None at a block's end, where the device film
+    /// is empty): with [`Progress::sums`], what the image holds so far.
+    pub fn block_in_progress(&self, p: &Progress) -> Result<Option<Vec<f32>>> {
+        if (p.first + p.done) % film::FILM_BLOCK == 0 || p.done == p.budget {
+            return Ok(None);
+        }
+        film::download_window(self.ctx, self.film.device(), self.width, self.window).map(Some)
+    }
+
     /// The next pass's sample count: half the samples so far (log-spaced points on the error
     /// curve), under a time budget sized to the time left at the measured rate; None when the
     /// time is up or adaptive sampling has stopped every pixel.
-    fn plan_pass(&self, p: &Progress, first: u32, budget: u32) -> Option<u32> {
+    pub fn plan_pass(&self, p: &Progress) -> Option<u32> {
         let end = p
             .stop
-            .map_or(budget, |s| s.saturating_sub(first).min(budget));
+            .map_or(p.budget, |s| s.saturating_sub(p.first).min(p.budget));
         if p.done >= end {
             return None;
         }
@@ -455,7 +705,8 @@ impl Blocking<'_> {
 
     /// Decides every pixel's count from the pilot, which the device film holds, and uploads the
     /// pixels' end samples.
-    fn decide_counts(&self, p: &mut Progress, first: u32, planes: &[String]) -> Result<()> {
+    fn decide_counts(&self, p: &mut Progress, first: u32) -> Result<()> {
+        let planes = &p.planes;
         let (Some(t), Some((ends, order, ring))) = (self.settings.adaptive, self.adaptive) else {
             return Ok(());
         };
@@ -573,14 +824,8 @@ impl Blocking<'_> {
     }
 
     /// The pass's row of the error-against-time report, evaluated when asked.
-    fn report_pass(
-        &self,
-        p: &mut Progress,
-        planes: &[String],
-        evaluate: bool,
-        first: u32,
-        last: u32,
-    ) -> Result<()> {
+    fn report_pass(&self, p: &mut Progress) -> Result<()> {
+        let (first, last) = (p.first, p.first + p.budget);
         let mut report = super::PassReport {
             pass: p.passes.len() as u32,
             spp: p.done,
@@ -588,7 +833,7 @@ impl Blocking<'_> {
             wall_seconds: p.wall,
             ..Default::default()
         };
-        if !evaluate {
+        if !p.evaluate {
             p.passes.clear();
             p.passes.push(report);
             return Ok(());
@@ -602,7 +847,7 @@ impl Blocking<'_> {
         }
         let r = film::resolve(
             &peek,
-            planes,
+            &p.planes,
             self.window.width(),
             self.window.height(),
             p.done,

@@ -13,14 +13,16 @@ mod integrator;
 mod params;
 mod prepared;
 mod probe;
+mod progressive;
 mod session;
 mod settings;
 
-use crate::film::{self, FILM_BLOCK, FilmSums};
+use crate::film::{self, FilmSums};
 pub use crate::gpu_scene::SceneUpdate;
 pub use integrator::{Integrator, IntegratorPasses, Schedule};
 pub use params::Params;
 pub use prepared::PreparedScene;
+pub use progressive::{Peek, Progressive};
 pub use session::{ImageState, Pass, RenderSession, TargetImage};
 pub use settings::RenderSettings;
 
@@ -28,8 +30,7 @@ use crate::error::Result;
 use crate::metrics::ErrorMetrics;
 use crate::scene::Scene;
 use crate::trace::BuildStats;
-use crate::vk::{Context, GpuTimer};
-use ash::vk;
+use crate::vk::Context;
 use std::time::Instant;
 
 /// One row of the error-against-time report. Times and samples are cumulative.
@@ -211,103 +212,27 @@ impl Renderer {
         t0: Instant,
     ) -> Result<Vec<RenderOutput>> {
         let ctx = &self.ctx;
-        let (w, h) = (camera.width, camera.height);
-        settings.check(w, h)?;
-        let (range, window) = settings.job(w, h)?;
-        driver::check_trace(prepared, settings.trace)?;
-        driver::check_memory(
-            settings,
-            window,
-            settings.integrator.aov_planes().len(),
-            seeds.len(),
-        )?;
-        let mut setup = driver::Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
-        // Adaptive sampling: each pixel's end sample (all of them until the counts are
-        // decided) and the order in which the dispatches take the pixels.
-        let adaptive = match settings.adaptive {
-            Some(a) => {
-                let all = vec![u32::MAX; w as usize * h as usize];
-                let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-                let ends = ctx.upload("pixel ends", &all, usage)?;
-                let order = ctx.upload("pixel order", &all, usage)?;
-                setup.frame.pixel_ends = ends.address;
-                setup.frame.pixel_order = order.address;
-                Some((ends, order, adaptive::pilot_window(&a, window, w, h)))
-            }
-            None => None,
-        };
-        let frame = ctx.upload(
-            "frame",
-            std::slice::from_ref(&setup.frame),
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-        )?;
-        let film_buffers = driver::FilmBuffers::new(
-            ctx,
-            "film",
-            u64::from(w) * u64::from(h),
-            setup.aov_planes.len(),
-            vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
-        )?;
-        film::clear(ctx, film_buffers.device())?;
-        setup
-            .kernels
-            .bind(&frame, &film_buffers.film, film_buffers.aovs.as_ref());
-        let timer = GpuTimer::new(ctx)?;
-        let warmup_seconds = setup.warm_up(ctx)?;
+        let run = driver::Run::new(self, prepared, camera, settings, seeds.len())?;
         let setup_seconds = t0.elapsed().as_secs_f64();
-        // As many samples per dispatch as the budget allows over a tile, never across a film
-        // block (src/film/mod.rs): blocks leave the device whole.
-        let tile_pixels = u64::from(window.width().min(driver::TILE))
-            * u64::from(window.height().min(driver::TILE));
-        let loop_limited = self.loop_limited()?;
-        let per_dispatch = if loop_limited {
-            1
-        } else {
-            (settings.samples_per_submit / tile_pixels).clamp(1, u64::from(FILM_BLOCK)) as u32
-        };
-        let run = driver::Blocking {
-            ctx,
-            settings,
-            setup: &setup,
-            film: &film_buffers,
-            timer: timer.as_ref(),
-            width: w,
-            range,
-            window,
-            per_dispatch,
-            loop_limited,
-            adaptive: adaptive.as_ref().map(|(e, o, pilot)| (e, o, *pilot)),
-            height: h,
-        };
-        let (first, last) = run.blocks();
+        let blocking = run.blocking(ctx, settings);
+        let (first, last) = blocking.blocks();
         progress(0, last - first);
         let mut outputs = Vec::with_capacity(seeds.len());
         for (index, &seed) in seeds.iter().enumerate() {
             let t0 = if index == 0 { t0 } else { Instant::now() };
             if index > 0 {
-                film::clear(ctx, film_buffers.device())?;
+                film::clear(ctx, run.film.device())?;
             }
-            let o = run.render_seed(seed, progress)?;
-            let mut stats = RenderStats::of(prepared, &setup, &o);
-            stats.warmup_seconds = warmup_seconds;
+            let o = blocking.render_seed(seed, progress)?;
+            let interrupted = o.interrupted;
             // Later seeds reuse the set-up: only the film is cleared.
-            stats.setup_seconds = if index == 0 { setup_seconds } else { 0.0 };
-            stats.total_seconds = t0.elapsed().as_secs_f64();
-            outputs.push(RenderOutput {
-                stats,
-                film: o.resolved.film,
-                passes: o.passes,
-                job: JobSums {
-                    range: o.range,
-                    total_spp: settings.spp,
-                    sums: o.sums,
-                },
-            });
-            if o.interrupted {
+            let setup_seconds = if index == 0 { setup_seconds } else { 0.0 };
+            outputs.push(run.output(prepared, settings, o, setup_seconds, t0));
+            if interrupted {
                 break;
             }
         }
-        setup.keep(prepared);
+        run.keep(prepared);
         Ok(outputs)
     }
 }
