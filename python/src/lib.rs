@@ -50,6 +50,7 @@ fn context(device: &Option<String>) -> illum::Result<Context> {
         let ctx = Context::new(&ContextOptions {
             device: device.clone(),
             validation: false,
+            ..Default::default()
         })?;
         c.push((device.clone(), ctx.clone()));
         Ok(ctx)

@@ -77,6 +77,7 @@ fn prepared(a: &BenchPreparedArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: false,
+        ..Default::default()
     })?;
     let r = Renderer::new(ctx.clone());
     let settings = RenderSettings {
@@ -191,6 +192,7 @@ fn trace(a: &BenchTraceArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: a.validate,
+        ..Default::default()
     })?;
     if paths.contains(&TraceMode::RayQuery) && !ctx.ray_query() {
         crate::note!(

@@ -48,6 +48,7 @@ pub fn run(a: &BenchLightsArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: false,
+        ..Default::default()
     })?;
     let r = Renderer::new(ctx.clone());
     println!(

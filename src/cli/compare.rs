@@ -131,6 +131,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: false,
+        ..Default::default()
     })?;
     let renderer = Renderer::new(ctx.clone());
     let budget = Budget {

@@ -186,6 +186,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: a.validate,
+        ..Default::default()
     })?;
     let renderer = Renderer::new(ctx.clone());
     let spp = match (a.spp, a.time) {
@@ -501,6 +502,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: a.validate,
+        ..Default::default()
     })?;
     let renderer = Renderer::new(ctx.clone());
     let settings = RenderSettings {

@@ -78,6 +78,7 @@ pub fn run(a: &StressArgs) -> Result<()> {
     let ctx = Context::new(&ContextOptions {
         device: a.device.clone(),
         validation: false,
+        ..Default::default()
     })?;
     let renderer = Renderer::new(ctx.clone());
     let o = crate::stress::StressOptions {

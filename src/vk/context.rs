@@ -13,6 +13,10 @@ pub struct ContextOptions {
     pub device: Option<String>,
     /// Enable VK_LAYER_KHRONOS_validation and collect its messages (also on when ILLUM_VALIDATION=1).
     pub validation: bool,
+    /// Instance extensions to enable besides illum's own (a window's surface extensions).
+    pub instance_extensions: Vec<CString>,
+    /// Device extensions to enable besides illum's own (VK_KHR_swapchain for a window).
+    pub device_extensions: Vec<CString>,
 }
 
 /// Handles of an application's own Vulkan objects, for embedding illum on its device.
@@ -107,7 +111,11 @@ pub(crate) fn load_entry() -> Result<ash::Entry> {
     unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))
 }
 
-pub(crate) fn create_instance(entry: &ash::Entry, validation: bool) -> Result<ash::Instance> {
+pub(crate) fn create_instance(
+    entry: &ash::Entry,
+    validation: bool,
+    extra: &[CString],
+) -> Result<ash::Instance> {
     // SAFETY: plain Vulkan calls with valid create infos.
     unsafe {
         let version = entry
@@ -125,7 +133,7 @@ pub(crate) fn create_instance(entry: &ash::Entry, validation: bool) -> Result<as
             .engine_name(&app)
             .api_version(version.min(vk::API_VERSION_1_3));
         let mut layers = Vec::new();
-        let mut exts = Vec::new();
+        let mut exts: Vec<_> = extra.iter().map(|e| e.as_ptr()).collect();
         if validation {
             let available = entry
                 .enumerate_instance_layer_properties()
@@ -164,7 +172,7 @@ impl Context {
         let validation = opts.validation
             || std::env::var("ILLUM_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
         let entry = load_entry()?;
-        let instance = create_instance(&entry, validation)?;
+        let instance = create_instance(&entry, validation, &opts.instance_extensions)?;
         let messages = Arc::new(Mutex::new(Vec::new()));
         // SAFETY: valid instance; every object created here is owned by the returned Context or
         // destroyed on the error paths.
@@ -286,7 +294,7 @@ impl Context {
             let qinfo = [vk::DeviceQueueCreateInfo::default()
                 .queue_family_index(qf)
                 .queue_priorities(&prio)];
-            let mut exts = Vec::new();
+            let mut exts: Vec<_> = opts.device_extensions.iter().map(|e| e.as_ptr()).collect();
             if rq {
                 exts.push(ash::khr::acceleration_structure::NAME.as_ptr());
                 exts.push(ash::khr::ray_query::NAME.as_ptr());

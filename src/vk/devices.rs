@@ -133,7 +133,7 @@ pub(crate) unsafe fn describe(
 /// Every Vulkan device of this machine.
 pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     let entry = load_entry()?;
-    let instance = create_instance(&entry, false)?;
+    let instance = create_instance(&entry, false, &[])?;
     // SAFETY: the instance is valid and destroyed once, below.
     unsafe {
         let pds = instance.enumerate_physical_devices();

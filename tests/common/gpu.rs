@@ -9,6 +9,7 @@ pub fn context() -> Context {
     Context::new(&ContextOptions {
         device: std::env::var("ILLUM_TEST_DEVICE").ok(),
         validation: true,
+        ..Default::default()
     })
     .expect("creating a Vulkan context with validation layers")
 }
