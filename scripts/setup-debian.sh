@@ -6,6 +6,8 @@
 #     libvulkan-dev (Vulkan headers for the C API test, tests/capi.rs)
 #   - slurm-wlm and munge, for the single-node Slurm that scripts/test-slurm.sh starts (no
 #     daemon is enabled or started here; Debian's packages start none without a slurm.conf)
+#   - xvfb, xdotool and the X11 libraries winit loads (libxkbcommon-x11, libXcursor, libXrandr,
+#     libXi), for `illum view` and its tests under a virtual display
 #   - python3-venv, and kubernetes-validate (PyPI, pinned) in .venv-k8s/ for scripts/test-k8s.sh
 #   - maturin, numpy, pytest and OpenEXR (PyPI, pinned) in .venv-py/ for the Python module
 #   - Debian's stock Mesa 22.3.6 lavapipe (no ray query) unpacked under .vk/mesa-stock, so the
@@ -37,7 +39,8 @@ if [ ! -f "$bp" ] || [ "$(cat "$bp")" != "$want" ]; then
 fi
 
 need_pkgs=()
-for p in libvulkan1 libvulkan-dev vulkan-validationlayers g++ libshaderc-dev glslang-dev slurm-wlm munge python3-venv; do
+for p in libvulkan1 libvulkan-dev vulkan-validationlayers g++ libshaderc-dev glslang-dev slurm-wlm munge python3-venv \
+         xvfb xauth xdotool libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6; do
   dpkg -s "$p" >/dev/null 2>&1 || need_pkgs+=("$p")
 done
 mesa_ver=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)

@@ -30,3 +30,4 @@ pub mod render;
 pub mod report;
 pub mod stress;
 pub mod trace;
+pub mod view;

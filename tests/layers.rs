@@ -32,6 +32,7 @@ const LAYERS: &[&[&str]] = &[
     &["compare"],
     // Tools and front ends.
     &["stress"],
+    &["view"],
     &["cli", "capi"],
 ];
 

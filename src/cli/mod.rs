@@ -12,6 +12,7 @@ pub mod render;
 pub mod schema;
 mod signal;
 pub mod stress;
+pub mod view;
 
 use crate::render::{Integrator, Params};
 use crate::scene::Scene;
@@ -38,6 +39,9 @@ pub enum Command {
     /// Merge the jobs of a split render (partial EXRs of render --samples/--crop) into one image,
     /// bit-identical to rendering it in one piece.
     Merge(merge::MergeArgs),
+    /// Open a window that renders the scene progressively: the mouse moves the camera, edits of
+    /// the scene file show at once, S saves the image (docs/view.md).
+    View(view::ViewArgs),
 }
 
 /// Runs a command, prints its error if any, and returns the process exit status: 0, 1 for an
@@ -53,6 +57,7 @@ pub fn run(command: Command) -> i32 {
         Command::Bench(b) => bench::run(&b),
         Command::Stress(a) => stress::run(&a),
         Command::Merge(a) => merge::run(&a),
+        Command::View(a) => view::run(&a),
     };
     match result {
         Ok(()) => 0,

@@ -18,7 +18,7 @@ pub use file::{
 };
 pub use metadata::image_metadata;
 pub use openexr::{ExrImage, read_exr, read_reference, write_exr};
-pub use png::write_png;
+pub use png::{SrgbEncoder, write_png, write_rgb8_png};
 
 pub use crate::film::{AovPlane, Film};
 

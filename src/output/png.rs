@@ -16,7 +16,16 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
     let encoder = SrgbEncoder::new();
     let mut bytes = Vec::with_capacity(film.pixel_count() * 3);
     bytes.extend(film.beauty.iter().flatten().map(|&v| encoder.encode(v)));
+    write_rgb8_png(path, &bytes, film.width, film.height)
+}
 
+/// Writes `width` x `height` 8-bit RGB pixels (row-major) as a PNG, through a temporary file.
+pub fn write_rgb8_png(
+    path: &Path,
+    bytes: &[u8],
+    width: u32,
+    height: u32,
+) -> Result<(), OutputError> {
     let io_err = |cause| OutputError::Io {
         path: path.to_path_buf(),
         cause,
@@ -24,12 +33,7 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
     super::write_atomically(path, |tmp| {
         let mut out = BufWriter::new(File::create(tmp).map_err(io_err)?);
         PngEncoder::new(&mut out)
-            .write_image(
-                &bytes,
-                film.width,
-                film.height,
-                image::ExtendedColorType::Rgb8,
-            )
+            .write_image(bytes, width, height, image::ExtendedColorType::Rgb8)
             .map_err(|cause| OutputError::Png {
                 path: path.to_path_buf(),
                 cause,
@@ -52,18 +56,18 @@ fn srgb_eotf(e: f64) -> f64 {
 /// Quantises linear values to 8-bit sRGB without a `powf` per sample: byte k+1 starts at the
 /// linear value whose encoding is (k + 0.5) / 255, so the byte is the number of such
 /// thresholds at or below the value (round-half-up of `255 * oetf(v)`).
-pub(crate) struct SrgbEncoder {
+pub struct SrgbEncoder {
     thresholds: [f64; 255],
 }
 
 impl SrgbEncoder {
-    pub(crate) fn new() -> Self {
+    pub fn new() -> Self {
         Self {
             thresholds: std::array::from_fn(|k| srgb_eotf((k as f64 + 0.5) / 255.0)),
         }
     }
 
-    pub(crate) fn encode(&self, v: f32) -> u8 {
+    pub fn encode(&self, v: f32) -> u8 {
         if !v.is_finite() {
             return 0;
         }

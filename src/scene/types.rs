@@ -42,7 +42,7 @@ pub struct IntegratorChoice {
     pub params: Vec<(String, String)>,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub position: DVec3,
     pub look_at: DVec3,
