@@ -60,6 +60,12 @@ pub struct SrgbEncoder {
     thresholds: [f64; 255],
 }
 
+impl Default for SrgbEncoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl SrgbEncoder {
     pub fn new() -> Self {
         Self {

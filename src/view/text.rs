@@ -67,9 +67,8 @@ impl Frame<'_> {
         }
         let o = 4 * (y as usize * self.width as usize + x as usize);
         let a = alpha.clamp(0.0, 1.0);
-        for c in 0..3 {
-            let d = f32::from(self.pixels[o + c]);
-            self.pixels[o + c] = (d + (f32::from(color[c]) - d) * a).round() as u8;
+        for (d, &c) in self.pixels[o..o + 3].iter_mut().zip(&color) {
+            *d = (f32::from(*d) + (f32::from(c) - f32::from(*d)) * a).round() as u8;
         }
         self.pixels[o + 3] = 255;
     }
