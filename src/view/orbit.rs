@@ -21,7 +21,7 @@ pub fn orbit(c: &Camera, dx: f64, dy: f64) -> Camera {
     let polar = yawed.normalize().dot(up).clamp(-1.0, 1.0).acos();
     let limit = 1f64.to_radians();
     let target = (polar + dy * ORBIT_PER_PIXEL).clamp(limit, std::f64::consts::PI - limit);
-    let pitched = rotate(yawed, right, polar - target);
+    let pitched = rotate(yawed, right, target - polar);
     Camera {
         position: c.look_at + pitched.normalize() * r,
         ..c.clone()
