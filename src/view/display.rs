@@ -231,8 +231,8 @@ mod tests {
         assert_eq!(
             place([64, 48], [200, 200], 40),
             Placement {
-                x0: 36,
-                y0: 32,
+                x0: 4,
+                y0: 8,
                 width: 192,
                 height: 144
             }
