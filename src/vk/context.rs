@@ -61,6 +61,10 @@ pub struct Inner {
     pub(crate) uploaded_bytes: std::sync::atomic::AtomicU64,
     /// Trace-structure levels built: bottom (per mesh or shape run) and top.
     pub(crate) builds: [std::sync::atomic::AtomicU64; 2],
+    /// Pipelines are created through it; with a file, it persists across runs (illum's own
+    /// devices only: an embedding application keeps its own caches).
+    pub(crate) pipeline_cache: vk::PipelineCache,
+    pub(crate) pipeline_cache_file: Option<std::path::PathBuf>,
     owned: bool,
 }
 
@@ -363,6 +367,21 @@ impl Context {
                     None,
                 )
                 .vk("vkCreateCommandPool")?;
+            let props = instance.get_physical_device_properties(pd);
+            let file = if owned {
+                super::pipeline_cache::path(&props)
+            } else {
+                None
+            };
+            let data = file
+                .as_ref()
+                .map_or_else(Vec::new, |f| super::pipeline_cache::initial_data(f, &props));
+            let pipeline_cache = device
+                .create_pipeline_cache(
+                    &vk::PipelineCacheCreateInfo::default().initial_data(&data),
+                    None,
+                )
+                .vk("vkCreatePipelineCache")?;
             Ok(Context(Arc::new(Inner {
                 entry,
                 instance,
@@ -384,6 +403,8 @@ impl Context {
                 uploads: Default::default(),
                 uploaded_bytes: Default::default(),
                 builds: Default::default(),
+                pipeline_cache,
+                pipeline_cache_file: file,
                 owned,
             })))
         }
@@ -450,6 +471,8 @@ impl Drop for Inner {
                 self.device.destroy_command_pool(*pool, None);
             }
             self.allocator.shutdown();
+            self.device
+                .destroy_pipeline_cache(self.pipeline_cache, None);
             if self.owned {
                 self.device.destroy_device(None);
                 if let Some((du, m)) = &self.debug {

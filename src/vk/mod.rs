@@ -7,6 +7,7 @@ mod devices;
 mod error;
 mod memory;
 mod pipeline;
+mod pipeline_cache;
 mod requirements;
 mod timer;
 

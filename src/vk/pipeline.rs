@@ -89,7 +89,7 @@ impl ComputePipeline {
                 .specialization_info(&spec_info);
             let (t0, cpu0) = (std::time::Instant::now(), process_cpu_seconds());
             let created = dev.create_compute_pipelines(
-                vk::PipelineCache::null(),
+                ctx.pipeline_cache,
                 &[vk::ComputePipelineCreateInfo::default()
                     .stage(stage)
                     .layout(p.layout)],
@@ -107,6 +107,9 @@ impl ComputePipeline {
                 );
             }
             p.pipeline = created.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
+            if let Some(file) = &ctx.pipeline_cache_file {
+                super::pipeline_cache::save(dev, ctx.pipeline_cache, file);
+            }
             let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
             for &(_, ty) in bindings {
                 match sizes.iter_mut().find(|s| s.ty == ty) {
