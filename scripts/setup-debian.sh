@@ -9,7 +9,8 @@
 #   - xvfb, xdotool and the X11 libraries winit loads (libxkbcommon-x11, libXcursor, libXrandr,
 #     libXi), for `illum view` and its tests under a virtual display
 #   - python3-venv, and kubernetes-validate (PyPI, pinned) in .venv-k8s/ for scripts/test-k8s.sh
-#   - maturin, numpy, pytest and OpenEXR (PyPI, pinned) in .venv-py/ for the Python module
+#   - maturin, numpy, pytest and OpenEXR (PyPI, pinned) in .venv-py/ for the Python module;
+#     usd-core for the USD tests; pyoidn for Open Image Denoise's libraries (--denoise)
 #   - Debian's stock Mesa 22.3.6 lavapipe (no ray query) unpacked under .vk/mesa-stock, so the
 #     compute-BVH path can be tested on a real device that lacks the extension.
 set -euo pipefail
@@ -94,5 +95,11 @@ if [ ! -x "$pyvenv/bin/maturin" ]; then
 fi
 if ! "$pyvenv/bin/python" -c "import pxr" 2>/dev/null; then
   "$pyvenv/bin/pip" install -q --disable-pip-version-check usd-core==26.11
+fi
+# Intel Open Image Denoise 2.5.1 (Debian 12 has no package): the pyoidn wheel ships its shared
+# libraries, which illum loads for --denoise and the view's denoised preview (src/denoise.rs
+# finds them in .venv-py).
+if ! ls "$pyvenv"/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2 >/dev/null 2>&1; then
+  "$pyvenv/bin/pip" install -q --disable-pip-version-check pyoidn==2.5.1.0
 fi
 echo "setup-debian: ok (mesa $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers); stock lavapipe at $stock)"

@@ -18,6 +18,7 @@ pub mod shaders {
 pub mod capi;
 pub mod cli;
 pub mod compare;
+pub mod denoise;
 pub mod error;
 pub mod vk;
 

@@ -19,8 +19,10 @@ const LAYERS: &[&[&str]] = &[
     // The scene on the device, then its trace structure.
     &["gpu_scene"],
     &["trace"],
-    // Film sums, blocks and the resolved film: below both render and output.
+    // Film sums, blocks and the resolved film: below both render and output; the denoiser, on
+    // resolved films.
     &["film"],
+    &["denoise"],
     // The render core: driver, prepared scenes, sessions, the integrator seam.
     &["render"],
     // The integrators and their table.
@@ -30,7 +32,7 @@ const LAYERS: &[&[&str]] = &[
     &["jobs", "report"],
     // Comparisons of integrators, techniques and allocations at equal time: on reports.
     &["compare"],
-    // Tools and front ends.
+    // Tools and front ends (the window over the render core, outputs and the denoiser).
     &["stress"],
     &["view"],
     &["cli", "capi"],

@@ -79,6 +79,10 @@ pub struct RenderArgs {
     /// Also write an sRGB PNG of the beauty beside the EXR.
     #[arg(long)]
     pub png: bool,
+    /// Add a `Denoised` layer to the EXR: the beauty denoised by Intel Open Image Denoise with
+    /// the albedo and normal planes as guides (the beauty itself stays as rendered).
+    #[arg(long)]
+    pub denoise: bool,
     /// No progress bar, messages or summary (errors and warnings still print).
     #[arg(short, long)]
     pub quiet: bool,
@@ -175,6 +179,12 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         ("plot", a.report_plot.as_deref()),
     ]);
     check_outputs(&outputs, &a.inputs())?;
+    // The denoiser is loaded before the render: a missing library must not cost the render.
+    let denoiser = a
+        .denoise
+        .then(crate::denoise::Denoiser::new)
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
     let scene = a.scene.load()?;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let reference = a
@@ -228,7 +238,12 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     setup_done.store(true, Ordering::SeqCst);
     ctx.set_kernel_listener(None);
     bar.finish_and_clear();
-    let out = out?;
+    let mut out = out?;
+    let mut meta = image_metadata(&out, &settings, &ctx.info().name);
+    if let Some(d) = &denoiser {
+        d.add_layer(&mut out.film).map_err(anyhow::Error::msg)?;
+        meta.extra.push(("illum.denoiser".into(), d.description()));
+    }
     let s = &out.stats;
     if !s.dark_lights.is_empty() {
         crate::note!(
@@ -244,7 +259,6 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
 
     // The image first: a report or plot that fails to write must not lose it.
-    let meta = image_metadata(&out, &settings, &ctx.info().name);
     write_exr(&exr_path, &out.film, &meta)?;
     if let Some(p) = &png_path {
         write_png(p, &out.film)?;
@@ -468,10 +482,11 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         || a.report.is_some()
         || a.report_plot.is_some()
         || a.png
+        || a.denoise
     {
         bail!(
             "{what} render one job of an image: they take --spp, not --time, \
-             --reference, --report, --report-plot or --png (merge the jobs first)"
+             --reference, --report, --report-plot, --png or --denoise (merge the jobs first)"
         );
     }
     let spp = match (a.spp, a.part) {
