@@ -104,17 +104,17 @@ fn load() -> Result<Api, String> {
         // SAFETY: the symbols are OIDN 2's C functions with these signatures (oidn.h).
         unsafe {
             return Ok(Api {
-                new_device: std::mem::transmute(symbol(c"oidnNewDevice")?),
-                commit_device: std::mem::transmute(symbol(c"oidnCommitDevice")?),
-                device_error: std::mem::transmute(symbol(c"oidnGetDeviceError")?),
-                device_int: std::mem::transmute(symbol(c"oidnGetDeviceInt")?),
-                release_device: std::mem::transmute(symbol(c"oidnReleaseDevice")?),
-                new_filter: std::mem::transmute(symbol(c"oidnNewFilter")?),
-                set_image: std::mem::transmute(symbol(c"oidnSetSharedFilterImage")?),
-                set_bool: std::mem::transmute(symbol(c"oidnSetFilterBool")?),
-                commit_filter: std::mem::transmute(symbol(c"oidnCommitFilter")?),
-                execute_filter: std::mem::transmute(symbol(c"oidnExecuteFilter")?),
-                release_filter: std::mem::transmute(symbol(c"oidnReleaseFilter")?),
+                new_device: function(symbol(c"oidnNewDevice")?),
+                commit_device: function(symbol(c"oidnCommitDevice")?),
+                device_error: function(symbol(c"oidnGetDeviceError")?),
+                device_int: function(symbol(c"oidnGetDeviceInt")?),
+                release_device: function(symbol(c"oidnReleaseDevice")?),
+                new_filter: function(symbol(c"oidnNewFilter")?),
+                set_image: function(symbol(c"oidnSetSharedFilterImage")?),
+                set_bool: function(symbol(c"oidnSetFilterBool")?),
+                commit_filter: function(symbol(c"oidnCommitFilter")?),
+                execute_filter: function(symbol(c"oidnExecuteFilter")?),
+                release_filter: function(symbol(c"oidnReleaseFilter")?),
                 path: path.display().to_string(),
             });
         }
@@ -129,6 +129,16 @@ fn load() -> Result<Api, String> {
             .collect::<Vec<_>>()
             .join(", ")
     ))
+}
+
+/// A symbol as the function pointer type `F`.
+///
+/// # Safety
+/// The symbol must be a function of type `F`.
+unsafe fn function<F: Copy>(symbol: *mut c_void) -> F {
+    assert_eq!(std::mem::size_of::<F>(), std::mem::size_of::<*mut c_void>());
+    // SAFETY: the caller's contract; same size, checked above.
+    unsafe { std::mem::transmute_copy::<*mut c_void, F>(&symbol) }
 }
 
 fn api() -> Result<&'static Api, String> {
