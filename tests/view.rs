@@ -377,3 +377,67 @@ fn the_mouse_orbits_and_r_brings_the_scene_camera_back() {
     let (code, log) = v.wait();
     assert_eq!(code, 0, "{}", log.join("\n"));
 }
+
+/// The denoised preview shows what `render --denoise` writes as its Denoised layer (the same
+/// planes into the same denoiser), while the saved beauty stays the render's.
+#[test]
+fn the_denoised_preview_shows_the_denoised_layer() {
+    let x = Xvfb::start();
+    let scene = scene_file("denoise-view.json", SCENE);
+    let (saved, shot) = (temp_path("denoise-view.exr"), temp_path("denoise-view.png"));
+    let v = Viewer::start(
+        &x,
+        &[
+            scene.to_str().unwrap(),
+            "--spp",
+            "8",
+            "--scale",
+            "1",
+            "--frames",
+            "30",
+            "--denoise",
+            "--save-at-exit",
+            "-o",
+            saved.to_str().unwrap(),
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ],
+    );
+    let (code, log) = v.wait();
+    assert_eq!(code, 0, "{}", log.join("\n"));
+    assert!(
+        log.iter().any(|l| l.contains("denoised preview on")),
+        "{}",
+        log.join("\n")
+    );
+    let out = temp_path("denoise-render.exr");
+    let (code, log) = illum_cli(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "8",
+        "--denoise",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{log}");
+    let exr = read(&out);
+    let plane = |name: &str| &exr.channels.iter().find(|c| c.0 == name).unwrap().1;
+    let enc = illum::output::SrgbEncoder::new();
+    let (r, g, b) = (
+        plane("Denoised.R"),
+        plane("Denoised.G"),
+        plane("Denoised.B"),
+    );
+    let png = image::RgbImage::from_fn(exr.width, exr.height, |x, y| {
+        let i = (y * exr.width + x) as usize;
+        image::Rgb([enc.encode(r[i]), enc.encode(g[i]), enc.encode(b[i])])
+    });
+    assert_shows(&shot, &png, "the denoised preview");
+    // The saved beauty is the render's, not the preview.
+    let view = read(&saved);
+    let beauty =
+        |e: &illum::output::ExrImage| e.channels.iter().find(|c| c.0 == "R").unwrap().1.clone();
+    assert_eq!(beauty(&view), beauty(&exr));
+}

@@ -44,6 +44,9 @@ pub struct ViewArgs {
     /// 1024x800]
     #[arg(long)]
     pub scale: Option<u32>,
+    /// Start with the denoised preview on (D toggles it).
+    #[arg(long)]
+    pub denoise: bool,
     /// Quit after this many frames (for scripts and tests).
     #[arg(long, value_name = "N")]
     pub frames: Option<u64>,
@@ -115,6 +118,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         save_at_exit: a.save_at_exit,
         scale: a.scale,
         exposure: a.exposure,
+        denoise: a.denoise,
         cancel: signal::install(),
     };
     crate::view::run(&opts, a)

@@ -54,10 +54,7 @@ impl Plane {
 /// The plane's linear values, one RGB per pixel of the `pixels`-pixel image.
 pub fn values(peek: &Peek, plane: Plane, pixels: usize) -> Vec<[f32; 3]> {
     let count = |i| peek.channel(i, FilmPixel::BEAUTY_ODD + 3).max(1.0);
-    let mean = |i, at: usize| -> [f32; 3] {
-        let n = count(i);
-        std::array::from_fn(|c| (peek.channel(i, at + c) / n) as f32)
-    };
+    let mean = |i, at| mean(peek, i, at);
     match plane {
         Plane::Beauty => (0..pixels).map(|i| mean(i, FilmPixel::BEAUTY)).collect(),
         Plane::Albedo => (0..pixels).map(|i| mean(i, FilmPixel::ALBEDO)).collect(),
@@ -127,6 +124,26 @@ pub fn values(peek: &Peek, plane: Plane, pixels: usize) -> Vec<[f32; 3]> {
             })
             .collect(),
     }
+}
+
+/// Pixel `i`'s mean over its samples of the three channels from `at`, as the film's resolve
+/// computes it (the f64 sum over the sample count, rounded to f32 once).
+fn mean(peek: &Peek, i: usize, at: usize) -> [f32; 3] {
+    let n = peek.channel(i, FilmPixel::BEAUTY_ODD + 3).max(1.0);
+    std::array::from_fn(|c| (peek.channel(i, at + c) / n) as f32)
+}
+
+/// The planes the denoiser reads (beauty, albedo, normal, emission seen directly) as a film.
+pub fn film(peek: &Peek, width: u32, height: u32) -> crate::film::Film {
+    let mut f = crate::film::Film::new(width, height);
+    for i in 0..f.pixel_count() {
+        let mean = |at| mean(peek, i, at);
+        f.beauty[i] = mean(FilmPixel::BEAUTY);
+        f.albedo[i] = mean(FilmPixel::ALBEDO);
+        f.normal[i] = mean(FilmPixel::NORMAL);
+        f.emission[i] = mean(FilmPixel::EMISSION);
+    }
+    f
 }
 
 /// The image's relMSE estimated from its half-buffers (as `illum render` reports it), None

@@ -30,6 +30,7 @@ pub enum Action {
     PreviousPlane,
     Save,
     ResetCamera,
+    Denoise,
     Quit,
 }
 
@@ -78,6 +79,7 @@ fn action(key: &Key) -> Option<Action> {
             "A" => Some(Action::PreviousPlane),
             "s" | "S" => Some(Action::Save),
             "r" | "R" => Some(Action::ResetCamera),
+            "d" | "D" => Some(Action::Denoise),
             "q" | "Q" => Some(Action::Quit),
             _ => None,
         },

@@ -12,11 +12,14 @@ mod present;
 mod text;
 mod watch;
 
+use crate::denoise::Denoiser;
 use crate::output::{SrgbEncoder, image_metadata, write_exr, write_rgb8_png};
+use crate::render::Peek;
 use crate::render::{PreparedScene, Progressive, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, anyhow, bail};
+use display::Plane;
 use input::{Action, App};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -53,6 +56,8 @@ pub struct ViewOptions {
     pub scale: Option<u32>,
     /// Exposure of the displayed beauty, in stops.
     pub exposure: f32,
+    /// Start with the denoised preview on.
+    pub denoise: bool,
     /// Set by a signal: quit as if the window were closed (saving what `save_at_exit` asks).
     pub cancel: Arc<AtomicBool>,
 }
@@ -115,7 +120,13 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         applied: None,
         watch: opts.watch.as_deref().map(watch::Watch::new),
         spf: None,
+        denoiser: None,
+        denoise: false,
+        preview: None,
     };
+    if opts.denoise {
+        view.toggle_denoise();
+    }
     crate::note!(
         "illum view: {}x{} with {} on {} via {}, set up in {:.2} s",
         image[0],
@@ -227,6 +238,11 @@ struct View<'o> {
     watch: Option<watch::Watch>,
     /// Seconds per sample of the last step.
     spf: Option<f64>,
+    /// The denoiser, loaded at the first D; whether the preview is on; the last denoised
+    /// beauty, its spp and when it was made.
+    denoiser: Option<Result<Denoiser, String>>,
+    denoise: bool,
+    preview: Option<(Vec<[f32; 3]>, u32, Instant)>,
 }
 
 impl View<'_> {
@@ -303,6 +319,7 @@ impl View<'_> {
         let planes = display::planes(aovs.len());
         self.plane = self.plane.min(planes.len() - 1);
         self.curve.clear();
+        self.preview = None;
         let mut last_estimate = Instant::now();
         let mut finished_said = false;
         loop {
@@ -331,6 +348,7 @@ impl View<'_> {
                     Action::Save => self.save(p),
                     Action::ResetCamera => camera = self.file_camera.clone(),
                     Action::Quit => quit = true,
+                    Action::Denoise => self.toggle_denoise(),
                 }
             }
             if input.orbit != (0.0, 0.0) {
@@ -345,6 +363,7 @@ impl View<'_> {
             if camera != self.camera {
                 // The move restarts the image in this frame.
                 p.restart(&camera)?;
+                self.preview = None;
                 self.camera = camera;
                 self.curve.clear();
                 finished_said = false;
@@ -382,9 +401,16 @@ impl View<'_> {
                 last_estimate = Instant::now();
             }
             let plane = planes[self.plane];
-            let values = display::values(&peek, plane, pixels);
+            let mut name = plane.name(aovs);
+            let values = match (plane, self.denoised(p, &peek)) {
+                (Plane::Beauty, Some((image, n))) => {
+                    name = format!("beauty, denoised at {n} spp");
+                    image
+                }
+                _ => display::values(&peek, plane, pixels),
+            };
             let image = display::encode(&values, plane, self.exposure, &self.encoder);
-            let status = self.status(p, spp, plane.name(aovs));
+            let status = self.status(p, spp, name);
             let size = window.inner_size();
             self.frames += 1;
             let exiting = quit || self.opts.frames.is_some_and(|f| self.frames >= f);
@@ -426,6 +452,50 @@ impl View<'_> {
                 return Ok(Next::Quit);
             }
         }
+    }
+
+    fn toggle_denoise(&mut self) {
+        if self.denoise {
+            self.denoise = false;
+            self.say("denoised preview off".into());
+            return;
+        }
+        match self.denoiser.get_or_insert_with(Denoiser::new) {
+            Ok(d) => {
+                let what = d.description();
+                self.denoise = true;
+                self.say(format!("denoised preview on: {what}"));
+            }
+            Err(e) => {
+                let e = e.clone();
+                self.error(e);
+            }
+        }
+    }
+
+    /// The denoised beauty to show, when the preview is on: denoised again at most once a
+    /// second while samples come in, and once more when the render is done.
+    fn denoised(&mut self, p: &Progressive, peek: &Peek) -> Option<(Vec<[f32; 3]>, u32)> {
+        let Some(Ok(d)) = self.denoiser.as_ref().filter(|_| self.denoise) else {
+            return None;
+        };
+        let stale = self.preview.as_ref().is_none_or(|(_, n, at)| {
+            *n != p.done() && (at.elapsed() > Duration::from_secs(1) || p.finished())
+        });
+        if stale && p.done() > 0 {
+            let film = display::film(peek, self.camera.width, self.camera.height);
+            match d.denoise_film(&film) {
+                Ok(image) => self.preview = Some((image, p.done(), Instant::now())),
+                Err(e) => {
+                    self.denoise = false;
+                    self.error(e);
+                    return None;
+                }
+            }
+        }
+        self.preview
+            .as_ref()
+            .map(|(image, n, _)| (image.clone(), *n))
     }
 
     /// After a frame was presented: the first frame's time, an applied edit's latency.
@@ -521,7 +591,7 @@ fn compose(
     let curve_width = if extent[0] >= 480 { 120 } else { 0 };
     let right = extent[0].saturating_sub(curve_width + 8);
     text.draw(&mut frame, 6, top + 2, right, status, [225, 225, 225]);
-    let help = "drag: orbit · shift/right drag: pan · wheel: dolly · A: plane · +/-: exposure · S: save · R: camera · Q: quit";
+    let help = "drag: orbit · shift/right drag: pan · wheel: dolly · A: plane · +/-: exposure · D: denoise · S: save · R: camera · Q: quit";
     let (line, color) = match &message {
         Some((m, true)) => (m.as_str(), [255, 110, 100]),
         Some((m, false)) => (m.as_str(), [150, 220, 150]),
