@@ -50,7 +50,9 @@ for t in tests/*.rs; do
 done
 # Of tests/adaptive.rs only the merges and the command line run here (the packed dispatches at
 # one sample each); its statistics took 4 of this driver's minutes and have no code of their own.
+# Likewise the denoiser's error statistics (tests/denoise.rs: 118 s here, 14 s on Mesa 25).
 VK_DRIVER_FILES="$stock" VK_ICD_FILENAMES="$stock" cargo test --release --lib --bins "${tests[@]}" \
     -- --skip the_cache_agrees_with_brute_force --skip a_glossy_ball_in_the_furnace_keeps_its_light \
     --skip a_mirror_balls_caustic_agrees_with_path --skip adaptive_sampling_is_unbiased \
-    --skip adaptive_sampling_agrees_with_uniform_sampling --skip the_noise_threshold_reaches_its_target
+    --skip adaptive_sampling_agrees_with_uniform_sampling --skip the_noise_threshold_reaches_its_target \
+    --skip denoising_lowers_the_error_of_a_16_spp_render
