@@ -201,6 +201,7 @@ fn instanced_scene(width: u32, height: u32) -> Scene {
         description: None,
         integrator: Default::default(),
         warnings: Vec::new(),
+        inputs: Vec::new(),
         source: None,
     }
 }
@@ -623,6 +624,7 @@ fn the_compute_bvh_takes_degenerate_meshes() {
         source: None,
         integrator: Default::default(),
         warnings: Vec::new(),
+        inputs: Vec::new(),
     };
     let settings = RenderSettings {
         spp: 1,

@@ -162,3 +162,45 @@ fn an_update_cannot_change_geometry() {
     assert!(e.contains("prepare the scene again"), "{e}");
     assert_no_validation_messages(&ctx);
 }
+
+/// What an update cannot bring is refused, naming it, never silently left as it was: texture
+/// pixels and mesh normals (also uvs and tangents), as geometry is (above).
+#[test]
+fn an_update_refuses_what_it_cannot_upload() {
+    let ctx = context();
+    let r = Renderer::new(ctx.clone());
+    let json = SCENE
+        .replace(
+            r#""ball": {"diffuse": [0.7, 0.3, 0.2]}"#,
+            r#""ball": {"diffuse": [1, 1, 1], "diffuse_texture": "t"}"#,
+        )
+        .replace(
+            r#""materials""#,
+            r#""textures": {"t": {"file": "t.png"}}, "materials""#,
+        );
+    let dir = temp_path("update-refusals");
+    std::fs::create_dir_all(&dir).unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 50, 50]))
+        .save(dir.join("t.png"))
+        .unwrap();
+    let scene = illum::scene::from_json_str(&json, "<scene>", &dir).unwrap();
+    let mut prepared = r.prepare(&scene, trace_mode()).unwrap();
+    let refused = |prepared: &mut PreparedScene, edited: &Scene, what: &str| {
+        let e = prepared.update(&ctx, edited).unwrap_err().to_string();
+        assert!(e.contains(what), "{e}");
+    };
+    let mut pixels = scene.clone();
+    pixels.textures[0].texels[0].x = 0.1;
+    refused(&mut prepared, &pixels, "texture pixels");
+    let mut normals = scene.clone();
+    let card = normals
+        .meshes
+        .iter_mut()
+        .find(|m| m.name.contains("card"))
+        .unwrap();
+    card.normals = Some(vec![glam::Vec3::Z; card.positions.len()]);
+    refused(&mut prepared, &normals, "mesh normals");
+    // The prepared scene is as it was: an unchanged scene updates with nothing written.
+    assert!(prepared.update(&ctx, &scene).unwrap().tables.is_empty());
+    assert_no_validation_messages(&ctx);
+}

@@ -441,3 +441,55 @@ fn the_denoised_preview_shows_the_denoised_layer() {
         |e: &illum::output::ExrImage| e.channels.iter().find(|c| c.0 == "R").unwrap().1.clone();
     assert_eq!(beauty(&view), beauty(&exr));
 }
+
+/// The files a scene names are watched too: a texture edited on disk shows, the scene prepared
+/// again (a texture cannot be updated in place), and the result is the render of the new texture.
+#[test]
+fn an_edited_texture_shows() {
+    let x = Xvfb::start();
+    let dir = temp_path("texture-edit");
+    std::fs::create_dir_all(&dir).unwrap();
+    let texture = dir.join("albedo.png");
+    let write_texture = |rgb: [u8; 3]| {
+        let tmp = dir.join("albedo.tmp.png");
+        image::RgbImage::from_pixel(4, 4, image::Rgb(rgb))
+            .save(&tmp)
+            .unwrap();
+        std::fs::rename(&tmp, &texture).unwrap();
+    };
+    write_texture([200, 60, 40]);
+    let json = SCENE
+        .replace(
+            r#""ball": {"diffuse": [0.7, 0.3, 0.2]}"#,
+            r#""ball": {"diffuse": [1, 1, 1], "diffuse_texture": "albedo"}"#,
+        )
+        .replace(
+            r#""materials""#,
+            r#""textures": {"albedo": {"file": "albedo.png"}}, "materials""#,
+        );
+    let scene = dir.join("scene.json");
+    write_scene(&scene, &json);
+    let saved = dir.join("view.exr");
+    let mut v = Viewer::start(
+        &x,
+        &[
+            scene.to_str().unwrap(),
+            "--spp",
+            "8",
+            "--scale",
+            "1",
+            "--save-at-exit",
+            "-o",
+            saved.to_str().unwrap(),
+        ],
+    );
+    v.wait_for("8 spp done");
+    write_texture([40, 90, 220]);
+    let applied = v.wait_for("applied the edit");
+    assert!(applied.contains("prepared the scene again"), "{applied}");
+    v.wait_for("8 spp done");
+    let (code, log) = v.terminate();
+    assert_eq!(code, 0, "{}", log.join("\n"));
+    let (exr, _) = render(&scene, 8, "texture-render");
+    assert_same_pixels(&read(&saved), &exr, "saved after the texture edit");
+}

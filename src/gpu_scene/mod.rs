@@ -57,6 +57,8 @@ pub struct GpuScene {
     /// The tables the kernels reach through the frame constants, with what is needed to tell
     /// whether an edited scene changes them (see `update.rs`).
     tables: update::Tables,
+    /// A digest of what an update does not upload again (texture pixels, vertex attributes).
+    fixed_data: [u64; 2],
 }
 
 fn v4(v: DVec3, w: f64) -> [f32; 4] {
@@ -135,6 +137,7 @@ impl GpuScene {
             storage | build_input,
         )?;
         let tables = update::Tables::upload(ctx, &h)?;
+        let fixed_data = update::fixed_data(scene);
         let mut frame = Frame::default();
         tables.write_frame(&mut frame, &h);
         let addr = |b: &Option<Buffer>| b.as_ref().map_or(0, |b| b.address);
@@ -158,6 +161,7 @@ impl GpuScene {
             index_buffer,
             aabb_buffer,
             tables,
+            fixed_data,
         })
     }
 }

@@ -154,6 +154,23 @@ pub struct SceneUpdate {
     pub seconds: f64,
 }
 
+/// A digest of what an update does not upload again: texture pixels and mesh vertex attributes
+/// (an edit of either is refused rather than silently kept out).
+pub(super) fn fixed_data(scene: &Scene) -> [u64; 2] {
+    use std::hash::{Hash, Hasher};
+    let mut t = std::collections::hash_map::DefaultHasher::new();
+    for x in &scene.textures {
+        bytes(&x.texels).hash(&mut t);
+    }
+    let mut m = std::collections::hash_map::DefaultHasher::new();
+    for mesh in &scene.meshes {
+        mesh.normals.as_deref().map(bytes).hash(&mut m);
+        mesh.tangents.as_deref().map(bytes).hash(&mut m);
+        mesh.uvs.as_deref().map(bytes).hash(&mut m);
+    }
+    [t.finish(), m.finish()]
+}
+
 impl GpuScene {
     /// Whether `scene`'s mesh positions and indices are those uploaded.
     fn same_meshes(&self, scene: &Scene) -> bool {
@@ -169,11 +186,11 @@ impl GpuScene {
 
     /// Brings the uploaded scene to `scene`, an edit of the one it was made from: materials,
     /// lights and instance transforms may change; geometry (mesh positions and indices, analytic
-    /// shapes), the set of lights that emit and textures' sizes may not (an error names what
-    /// changed: prepare the scene again). Mesh normals, uvs, tangents and texture pixels are not
-    /// read again.
+    /// shapes, mesh normals, uvs and tangents), the set of lights that emit and textures (their
+    /// sizes and pixels) may not: an error names what changed (prepare the scene again).
     pub fn update(&mut self, ctx: &Context, scene: &Scene) -> Result<SceneUpdate> {
         let h = super::encode_scene(scene, self.origin, false)?;
+        let fixed = fixed_data(scene);
         let fixed = [
             ("the set of features", h.features == self.features),
             ("mesh geometry", self.same_meshes(scene)),
@@ -193,6 +210,11 @@ impl GpuScene {
             (
                 "textures",
                 h.textures.len() as u32 == self.frame.texture_count,
+            ),
+            ("texture pixels", fixed[0] == self.fixed_data[0]),
+            (
+                "mesh normals, uvs and tangents",
+                fixed[1] == self.fixed_data[1],
             ),
         ];
         if let Some((what, _)) = fixed.iter().find(|f| !f.1) {

@@ -19,7 +19,7 @@ mod light;
 use glam::{DMat4, Vec2, Vec3};
 use indexmap::IndexMap;
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -179,7 +179,34 @@ pub(crate) fn build(file: &SceneFile, origin: &str, base_dir: &Path) -> Result<S
             None => IntegratorChoice::default(),
         },
         warnings: Vec::new(),
+        inputs: Vec::new(),
     })
+}
+
+/// The files a scene file names (besides itself): its glTF files and images, packaged images
+/// left out, each once.
+fn inputs(file: &SceneFile, base_dir: &Path, scene_file: &Path) -> Vec<PathBuf> {
+    let mut v = vec![scene_file.to_path_buf()];
+    let named = file
+        .shapes
+        .0
+        .values()
+        .filter_map(|s| s.gltf.as_ref().map(|g| g.file.as_str()))
+        .chain(file.camera.gltf.as_deref())
+        .chain(
+            file.textures
+                .0
+                .values()
+                .filter(|t| t.bytes.is_none() && t.pixels.is_none())
+                .map(|t| t.file.as_str()),
+        );
+    for f in named {
+        let p = base_dir.join(f);
+        if !v.contains(&p) {
+            v.push(p);
+        }
+    }
+    v
 }
 
 /// The integrator section as text; the integrator it names reads (and checks) the values.
@@ -659,9 +686,11 @@ pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     if super::usd::is_usd(path) {
         let (file, warnings) = super::usd::load(path)?;
         // Asset paths come resolved (absolute); anything relative is the stage's folder's.
-        let mut scene = build(&file, &origin, path.parent().unwrap_or(Path::new("")))?;
+        let base = path.parent().unwrap_or(Path::new(""));
+        let mut scene = build(&file, &origin, base)?;
         scene.source = Some(path.to_path_buf());
         scene.warnings = warnings;
+        scene.inputs = inputs(&file, base, path);
         return Ok(scene);
     }
     let io = |e: std::io::Error| SceneError::Io {
@@ -682,6 +711,7 @@ pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     let file = parse(&text, &origin)?;
     let mut scene = build(&file, &origin, base)?;
     scene.source = Some(path.to_path_buf());
+    scene.inputs = inputs(&file, base, path);
     Ok(scene)
 }
 

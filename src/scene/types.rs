@@ -31,6 +31,9 @@ pub struct Scene {
     /// What the file holds that illum does not render, each naming where it is (a USD stage's
     /// prim and attribute); `illum render` prints them and `--strict` refuses the scene.
     pub warnings: Vec<String>,
+    /// The files read to build it: the scene file, glTF files and images (a USD stage's own
+    /// layers are the stage file only), for a watcher that reloads it on an edit.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// A scene's integrator defaults: the integrator's name (None: the renderer's default) and its

@@ -81,6 +81,7 @@ pub fn mesh_scene(mesh: Mesh, eye: DVec3, size: u32) -> Scene {
         integrator: Default::default(),
         warnings: Vec::new(),
         source: None,
+        inputs: Vec::new(),
     }
 }
 

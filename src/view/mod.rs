@@ -40,7 +40,8 @@ pub trait Source {
 pub struct ViewOptions {
     /// The window's title.
     pub title: String,
-    /// The scene file watched for edits (None: nothing to watch, e.g. the default scene).
+    /// The scene file watched for edits, with the files it names (None: nothing to watch,
+    /// e.g. the default scene).
     pub watch: Option<PathBuf>,
     pub device: Option<String>,
     pub validation: bool,
@@ -118,7 +119,13 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         started,
         first_frame: None,
         applied: None,
-        watch: opts.watch.as_deref().map(watch::Watch::new),
+        watch: opts.watch.as_ref().map(|f| {
+            watch::Watch::new(if scene.inputs.is_empty() {
+                std::slice::from_ref(f)
+            } else {
+                &scene.inputs
+            })
+        }),
         spf: None,
         denoiser: None,
         denoise: false,
@@ -167,6 +174,11 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
             let _ = window.request_inner_size(winit::dpi::PhysicalSize::new(size[0], size[1]));
         }
         scene = *edited;
+        if let Some(w) = &mut view.watch
+            && !scene.inputs.is_empty()
+        {
+            w.set_files(&scene.inputs);
+        }
         view.applied = Some((saved, t0, how));
     }
     drop(present);
