@@ -59,7 +59,8 @@ impl PreparedScene {
     /// preparing it again: edited materials and lights rewrite their tables only, moved instances
     /// also rebuild the trace structure's top level (never a bottom level), and a moved camera
     /// changes nothing here (each render writes its frame constants). Geometry, the set of lights
-    /// that emit and textures cannot change this way: the error names what changed.
+    /// that emit and textures (sizes and pixels) cannot change this way, nor mesh normals, uvs and
+    /// tangents: the error names what changed.
     pub fn update(&mut self, ctx: &crate::vk::Context, scene: &Scene) -> Result<SceneUpdate> {
         let t0 = Instant::now();
         let mut u = self.gpu.update(ctx, scene)?;
