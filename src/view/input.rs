@@ -19,6 +19,8 @@ pub struct Input {
     pub dolly: f64,
     pub close: bool,
     pub resized: bool,
+    /// The window asked to be drawn again (exposed).
+    pub redraw: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,6 +108,7 @@ impl ApplicationHandler for App {
         match event {
             WindowEvent::CloseRequested => i.close = true,
             WindowEvent::Resized(_) => i.resized = true,
+            WindowEvent::RedrawRequested => i.redraw = true,
             WindowEvent::ModifiersChanged(m) => self.shift = m.state().shift_key(),
             WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
                 if let Some(a) = action(&event.logical_key) {

@@ -130,6 +130,7 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         denoiser: None,
         denoise: false,
         preview: None,
+        restarts: 0,
     };
     if opts.denoise {
         view.toggle_denoise();
@@ -255,6 +256,20 @@ struct View<'o> {
     denoiser: Option<Result<Denoiser, String>>,
     denoise: bool,
     preview: Option<(Vec<[f32; 3]>, u32, Instant)>,
+    /// Restarts of the image (camera moves, edits): a frame after one is always shown.
+    restarts: u64,
+}
+
+/// What a frame shows, to tell whether the next would show anything new.
+#[derive(PartialEq)]
+struct Shown {
+    restarts: u64,
+    done: u32,
+    plane: usize,
+    exposure: u32,
+    message: Option<(String, bool)>,
+    denoise: bool,
+    size: [u32; 2],
 }
 
 impl View<'_> {
@@ -334,6 +349,8 @@ impl View<'_> {
         self.preview = None;
         let mut last_estimate = Instant::now();
         let mut finished_said = false;
+        let mut last_shown = None;
+        self.restarts += 1;
         loop {
             let idle = p.finished();
             let wait = if idle {
@@ -375,6 +392,7 @@ impl View<'_> {
             if camera != self.camera {
                 // The move restarts the image in this frame.
                 p.restart(&camera)?;
+                self.restarts += 1;
                 self.preview = None;
                 self.camera = camera;
                 self.curve.clear();
@@ -402,6 +420,27 @@ impl View<'_> {
                     self.spf = Some(t.elapsed().as_secs_f64() / f64::from(done));
                 }
             }
+            // Nothing new to show (converged, no input): no frame, so that an idle window
+            // costs nothing. Scripted runs (--frames) count every frame.
+            let size = window.inner_size();
+            let shown = Shown {
+                restarts: self.restarts,
+                done: p.done(),
+                plane: self.plane,
+                exposure: self.exposure.to_bits(),
+                message: self.message.clone(),
+                denoise: self.denoise,
+                size: [size.width, size.height],
+            };
+            let exiting = quit || self.opts.frames.is_some_and(|f| self.frames + 1 >= f);
+            if self.opts.frames.is_none()
+                && !exiting
+                && !input.redraw
+                && last_shown.as_ref() == Some(&shown)
+            {
+                continue;
+            }
+            last_shown = Some(shown);
             let peek = p.peek()?;
             let pixels = (self.camera.width * self.camera.height) as usize;
             if p.done() >= 2
@@ -423,9 +462,7 @@ impl View<'_> {
             };
             let image = display::encode(&values, plane, self.exposure, &self.encoder);
             let status = self.status(p, spp, name);
-            let size = window.inner_size();
             self.frames += 1;
-            let exiting = quit || self.opts.frames.is_some_and(|f| self.frames >= f);
             let capture = exiting && self.opts.screenshot.is_some();
             let bgra = present.bgra();
             let (text, bar, message) = (&self.text, self.bar, self.message.clone());
