@@ -14,6 +14,7 @@ mod params;
 mod prepared;
 mod probe;
 mod progressive;
+mod run;
 mod session;
 mod settings;
 
@@ -212,7 +213,7 @@ impl Renderer {
         t0: Instant,
     ) -> Result<Vec<RenderOutput>> {
         let ctx = &self.ctx;
-        let run = driver::Run::new(self, prepared, camera, settings, seeds.len())?;
+        let run = run::Run::new(self, prepared, camera, settings, seeds.len())?;
         let setup_seconds = t0.elapsed().as_secs_f64();
         let blocking = run.blocking(ctx, settings);
         let (first, last) = blocking.blocks();
