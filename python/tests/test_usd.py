@@ -426,19 +426,42 @@ def test_bad_stages_get_errors_naming_the_prim(tmp_path):
 def test_what_is_not_rendered_is_listed_and_strict_refuses_it(tmp_path):
     s = new_stage(tmp_path / "warn.usda")
     camera(s, (0, 1, 6))
-    UsdGeom.Cylinder.Define(s, "/World/Can")
+    UsdGeom.BasisCurves.Define(s, "/World/Hair")
     key = UsdLux.SphereLight.Define(s, "/Lights/Spot")
     UsdLux.ShapingAPI.Apply(key.GetPrim()).CreateShapingConeAngleAttr(30)
     s.Save()
     path = tmp_path / "warn.usda"
     w = illum.load(path).warnings
-    assert any(x.startswith("/World/Can: Cylinder is not rendered") for x in w), w
+    assert any(x.startswith("/World/Hair: BasisCurves is not rendered") for x in w), w
     assert any(x.startswith("/Lights/Spot.inputs:shaping:cone:angle:") for x in w), w
     p = cli("render", path, "-o", tmp_path / "x.exr", "--spp", 1, "--quiet")
-    assert p.returncode == 0 and "/World/Can: Cylinder is not rendered" in p.stderr, p.stderr
+    assert p.returncode == 0 and "/World/Hair: BasisCurves is not rendered" in p.stderr, p.stderr
     p = cli("render", path, "-o", tmp_path / "y.exr", "--spp", 1, "--strict")
     assert p.returncode != 0 and "--strict: 2 warning(s)" in p.stderr, p.stderr
     assert not (tmp_path / "y.exr").exists()
+
+
+@pytest.mark.parametrize("kind, depth", [("Cylinder", 5.0), ("Cone", 5.5), ("Capsule", 5.5),
+                                         ("Cylinder_1", 5.25)])
+def test_cylinders_cones_and_capsules_render_where_they_are(kind, depth, tmp_path):
+    """Each quadric about Y at the origin, seen from (0, 0, 6): the centre pixel's depth is the
+    distance to its surface there (radius 1: 5; the cone's, apex up at y = 1: 5.5; the capsule's,
+    radius 0.5: 5.5; a frustum of radii 1 and 0.5: 5.25), within the depth's spread over the
+    pixel (a few thousandths) and the tessellation (7.5e-5)."""
+    s = new_stage(tmp_path / "q.usda")
+    camera(s, (0, 0, 6), size=(33, 33))
+    p = s.DefinePrim("/World/Q", kind)
+    p.CreateAttribute("axis", Sdf.ValueTypeNames.Token).Set("Y")
+    if kind == "Cylinder_1":
+        p.CreateAttribute("radiusBottom", Sdf.ValueTypeNames.Double).Set(1.0)
+        p.CreateAttribute("radiusTop", Sdf.ValueTypeNames.Double).Set(0.5)
+    UsdLux.DomeLight.Define(s, "/Lights/Sky")
+    s.Save()
+    scene = illum.load(tmp_path / "q.usda")
+    assert scene.warnings == [], scene.warnings
+    z = scene.render(spp=16).depth
+    assert abs(z[16, 16] - depth) < 0.01, (kind, z[16, 16])
+    assert np.isfinite(z[16]).sum() > 2
 
 
 def test_usdc_and_usdz_read_as_usda(tmp_path):

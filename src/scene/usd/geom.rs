@@ -105,6 +105,9 @@ impl Reader {
             "Sphere" => self.sphere(prim, at)?,
             "Cube" => self.cube(prim, at)?,
             "Plane" => self.plane(prim, at)?,
+            "Cylinder" | "Cone" | "Capsule" | "Cylinder_1" | "Capsule_1" => {
+                self.quadric(prim, kind, at)?
+            }
             _ => return Ok(false),
         }
         Ok(true)
@@ -409,6 +412,53 @@ impl Reader {
             indices: Some(indices),
             normals: Some(normals),
             ..Default::default()
+        };
+        self.mesh_shape(prim, at, |_, _| Ok(Some(mesh)))
+    }
+
+    /// A Cylinder, Cone or Capsule (or the `_1` schemas with a top and a bottom radius) as a
+    /// mesh (src/scene/usd/quadric.rs), with UsdGeom's defaults.
+    fn quadric(&mut self, prim: &sdf::Path, kind: &str, at: &Place) -> Result<()> {
+        let axis_token = self.token(prim, "axis", "Z")?;
+        let axis = super::quadric::frame(&axis_token)
+            .ok_or_else(|| self.invalid(prim, "axis", &axis_token, "expected X, Y or Z"))?;
+        let (radius, height) = match kind {
+            "Capsule" | "Capsule_1" => (0.5, 1.0),
+            _ => (1.0, 2.0),
+        };
+        let height = self.number(prim, "height", height)?;
+        let (bottom, top) = match kind {
+            "Cylinder_1" | "Capsule_1" => (
+                self.number(prim, "radiusBottom", radius)?,
+                self.number(prim, "radiusTop", radius)?,
+            ),
+            _ => {
+                let r = self.number(prim, "radius", radius)?;
+                (r, if kind == "Cone" { 0.0 } else { r })
+            }
+        };
+        for (attr, v) in [("height", height), ("radius", bottom), ("radius", top)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(self.invalid(
+                    prim,
+                    attr,
+                    &v.to_string(),
+                    "expected a finite value >= 0",
+                ));
+            }
+        }
+        let mesh = if kind.starts_with("Capsule") {
+            if bottom != top {
+                return Err(self.invalid(
+                    prim,
+                    "radiusTop",
+                    &top.to_string(),
+                    "a capsule with unequal radii is not rendered (author it as a Mesh)",
+                ));
+            }
+            super::quadric::capsule(bottom, height, axis)
+        } else {
+            super::quadric::frustum(bottom, top, height, axis)
         };
         self.mesh_shape(prim, at, |_, _| Ok(Some(mesh)))
     }

@@ -171,7 +171,8 @@ impl Reader {
         let (local, _) = self.local_transform(prim)?;
         let transform = parent * local;
         match kind.as_str() {
-            "Mesh" | "Sphere" | "Cube" | "Plane" => out.push(Part {
+            "Mesh" | "Sphere" | "Cube" | "Plane" | "Cylinder" | "Cone" | "Capsule"
+            | "Cylinder_1" | "Capsule_1" => out.push(Part {
                 path: prim.clone(),
                 kind,
                 transform,

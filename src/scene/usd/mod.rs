@@ -9,6 +9,7 @@ mod camera;
 mod geom;
 mod instancer;
 mod lux;
+mod quadric;
 mod shade;
 mod value;
 mod xform;
@@ -478,9 +479,8 @@ impl Reader {
             "Camera" => self.cameras.push(path.clone()),
             "RenderSettings" => self.render_settings.push(path.clone()),
             "PointInstancer" => self.point_instancer(path, world)?,
-            "Cylinder" | "Cone" | "Capsule" | "Cylinder_1" | "Capsule_1" | "Points"
-            | "BasisCurves" | "NurbsCurves" | "HermiteCurves" | "NurbsPatch" | "TetMesh"
-            | "Volume" => self.warn(
+            "Points" | "BasisCurves" | "NurbsCurves" | "HermiteCurves" | "NurbsPatch"
+            | "TetMesh" | "Volume" => self.warn(
                 path,
                 "",
                 format!("{kind} is not rendered (illum has no exact {kind}; author it as a Mesh)"),
