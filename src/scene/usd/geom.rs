@@ -439,12 +439,7 @@ impl Reader {
         };
         for (attr, v) in [("height", height), ("radius", bottom), ("radius", top)] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(self.invalid(
-                    prim,
-                    attr,
-                    &v.to_string(),
-                    "expected a finite value >= 0",
-                ));
+                return Err(self.invalid(prim, attr, v, "expected a finite value >= 0"));
             }
         }
         let mesh = if kind.starts_with("Capsule") {
@@ -452,7 +447,7 @@ impl Reader {
                 return Err(self.invalid(
                     prim,
                     "radiusTop",
-                    &top.to_string(),
+                    top,
                     "a capsule with unequal radii is not rendered (author it as a Mesh)",
                 ));
             }
