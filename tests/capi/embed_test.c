@@ -129,11 +129,11 @@ int main(void) {
     FILE *f = fopen(path, "w");
     CHECK(f != NULL, "write %s", path);
     fputs("#usda 1.0\ndef Camera \"Cam\" {}\ndef DomeLight \"Sky\" {}\n"
-          "def Cylinder \"Can\" {}\ndef Cone \"Hat\" {}\n", f);
+          "def Points \"Dust\" {}\ndef BasisCurves \"Hair\" {}\n", f);
     fclose(f);
     OK(illum_scene_load(path, &stage));
     OK(illum_scene_warnings(stage, &warnings, &warning_count));
-    CHECK(warning_count == 2 && strstr(warnings, "/Can: Cylinder") && strstr(warnings, "\n/Hat: Cone"),
+    CHECK(warning_count == 2 && strstr(warnings, "/Dust: Points") && strstr(warnings, "\n/Hair: BasisCurves"),
           "%u warnings: %s", warning_count, warnings);
     illum_scene_destroy(stage);
     remove(path);
