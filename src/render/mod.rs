@@ -20,11 +20,12 @@ mod settings;
 
 use crate::film::{self, FilmSums};
 pub use crate::gpu_scene::SceneUpdate;
+pub use crate::vk::ImageState;
 pub use integrator::{Integrator, IntegratorPasses, Schedule};
 pub use params::Params;
 pub use prepared::PreparedScene;
 pub use progressive::{Peek, Progressive};
-pub use session::{ImageState, Pass, RenderSession, TargetImage};
+pub use session::{Pass, RenderSession, TargetImage};
 pub use settings::RenderSettings;
 
 use crate::error::Result;

@@ -58,17 +58,9 @@ use crate::error::{Error, Result};
 use crate::film::{FILM_BLOCK, Window};
 use crate::layout::*;
 use crate::scene::{Camera, Scene};
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, ComputePipeline, Context, ImageState, image_barrier};
 use ash::vk;
 use std::time::Instant;
-
-/// Where an image is: its layout and the stages and accesses of the commands around.
-#[derive(Clone, Copy, Debug)]
-pub struct ImageState {
-    pub layout: vk::ImageLayout,
-    pub stage: vk::PipelineStageFlags,
-    pub access: vk::AccessFlags,
-}
 
 /// The host's storage image a session writes into (see the module's contract).
 #[derive(Clone, Copy, Debug)]
@@ -430,42 +422,6 @@ unsafe fn barrier(dev: &ash::Device, cmd: vk::CommandBuffer) {
             &mb,
             &[],
             &[],
-        )
-    }
-}
-
-unsafe fn image_barrier(
-    dev: &ash::Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
-    from: &ImageState,
-    to: &ImageState,
-) {
-    let or_top = |s: vk::PipelineStageFlags, fallback| if s.is_empty() { fallback } else { s };
-    let b = [vk::ImageMemoryBarrier::default()
-        .old_layout(from.layout)
-        .new_layout(to.layout)
-        .src_access_mask(from.access)
-        .dst_access_mask(to.access)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(
-            vk::ImageSubresourceRange::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .level_count(1)
-                .layer_count(1),
-        )];
-    // SAFETY: cmd is recording (the caller's contract).
-    unsafe {
-        dev.cmd_pipeline_barrier(
-            cmd,
-            or_top(from.stage, vk::PipelineStageFlags::TOP_OF_PIPE),
-            or_top(to.stage, vk::PipelineStageFlags::BOTTOM_OF_PIPE),
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &b,
         )
     }
 }

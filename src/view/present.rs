@@ -2,7 +2,7 @@
 //! swapchain image and presented. One frame in flight; a frame can also be read back from the
 //! swapchain image it was presented from (the screenshot), so tests see what the window got.
 
-use crate::vk::{Buffer, Context, MemoryLocation};
+use crate::vk::{Buffer, Context, ImageState, MemoryLocation, image_barrier};
 use anyhow::{Context as _, Result, anyhow, bail};
 use ash::vk;
 use winit::raw_window_handle::{
@@ -335,72 +335,37 @@ impl Present {
                 &vk::CommandBufferBeginInfo::default()
                     .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )?;
-            let to_dst = barrier(
-                image,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::AccessFlags::empty(),
-                vk::AccessFlags::TRANSFER_WRITE,
+            let (undefined, dst, src, present) = (
+                state(vk::ImageLayout::UNDEFINED, vk::AccessFlags::empty()),
+                state(
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::AccessFlags::TRANSFER_WRITE,
+                ),
+                state(
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::AccessFlags::TRANSFER_READ,
+                ),
+                ImageState {
+                    layout: vk::ImageLayout::PRESENT_SRC_KHR,
+                    stage: vk::PipelineStageFlags::empty(),
+                    access: vk::AccessFlags::empty(),
+                },
             );
-            dev.cmd_pipeline_barrier(
-                self.cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[to_dst],
-            );
+            image_barrier(dev, self.cmd, image, &undefined, &dst);
             dev.cmd_copy_buffer_to_image(
                 self.cmd,
                 self.staging.buffer,
                 image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                dst.layout,
                 &[region],
             );
-            let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+            let mut last = dst;
             if let (true, Some(rb)) = (capture, &self.readback) {
-                let to_src = barrier(
-                    image,
-                    layout,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    vk::AccessFlags::TRANSFER_WRITE,
-                    vk::AccessFlags::TRANSFER_READ,
-                );
-                dev.cmd_pipeline_barrier(
-                    self.cmd,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[to_src],
-                );
-                dev.cmd_copy_image_to_buffer(
-                    self.cmd,
-                    image,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    rb.buffer,
-                    &[region],
-                );
-                layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+                image_barrier(dev, self.cmd, image, &dst, &src);
+                dev.cmd_copy_image_to_buffer(self.cmd, image, src.layout, rb.buffer, &[region]);
+                last = src;
             }
-            let to_present = barrier(
-                image,
-                layout,
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::TRANSFER_READ,
-                vk::AccessFlags::empty(),
-            );
-            dev.cmd_pipeline_barrier(
-                self.cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[to_present],
-            );
+            image_barrier(dev, self.cmd, image, &last, &present);
             dev.end_command_buffer(self.cmd)?;
             let (waits, stages, signals, cmds) = (
                 [self.acquired],
@@ -462,27 +427,13 @@ impl Present {
     }
 }
 
-fn barrier(
-    image: vk::Image,
-    from: vk::ImageLayout,
-    to: vk::ImageLayout,
-    src: vk::AccessFlags,
-    dst: vk::AccessFlags,
-) -> vk::ImageMemoryBarrier<'static> {
-    vk::ImageMemoryBarrier::default()
-        .old_layout(from)
-        .new_layout(to)
-        .src_access_mask(src)
-        .dst_access_mask(dst)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(
-            vk::ImageSubresourceRange::default()
-                .aspect_mask(vk::ImageAspectFlags::COLOR)
-                .level_count(1)
-                .layer_count(1),
-        )
+/// An image in `layout` for the frame's copies (transfer stage).
+fn state(layout: vk::ImageLayout, access: vk::AccessFlags) -> ImageState {
+    ImageState {
+        layout,
+        stage: vk::PipelineStageFlags::TRANSFER,
+        access,
+    }
 }
 
 fn create_surface(ctx: &Context, window: &winit::window::Window) -> Result<vk::SurfaceKHR> {

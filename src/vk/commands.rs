@@ -81,3 +81,52 @@ impl Context {
         }
     }
 }
+
+/// Where an image is: its layout and the stages and accesses of the commands around.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageState {
+    pub layout: vk::ImageLayout,
+    pub stage: vk::PipelineStageFlags,
+    pub access: vk::AccessFlags,
+}
+
+/// Records a barrier moving `image` (one colour mip and layer) from state `from` to `to`
+/// (an empty stage mask stands for the top, resp. bottom, of the pipe).
+///
+/// # Safety
+/// `cmd` must be in the recording state, `image` a live image of `dev`.
+pub unsafe fn image_barrier(
+    dev: &ash::Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    from: &ImageState,
+    to: &ImageState,
+) {
+    let or_top = |s: vk::PipelineStageFlags, fallback| if s.is_empty() { fallback } else { s };
+    let b = [vk::ImageMemoryBarrier::default()
+        .old_layout(from.layout)
+        .new_layout(to.layout)
+        .src_access_mask(from.access)
+        .dst_access_mask(to.access)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .level_count(1)
+                .layer_count(1),
+        )];
+    // SAFETY: the caller's contract.
+    unsafe {
+        dev.cmd_pipeline_barrier(
+            cmd,
+            or_top(from.stage, vk::PipelineStageFlags::TOP_OF_PIPE),
+            or_top(to.stage, vk::PipelineStageFlags::BOTTOM_OF_PIPE),
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &b,
+        )
+    }
+}

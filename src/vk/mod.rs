@@ -11,6 +11,7 @@ mod pipeline_cache;
 mod requirements;
 mod timer;
 
+pub use commands::{ImageState, image_barrier};
 pub use context::{Context, ContextOptions, ExternalDevice, KernelListener};
 pub use devices::{DeviceInfo, list_devices};
 pub use error::{Error, VkResultExt};
