@@ -2,13 +2,12 @@
 //! with their error table, error-against-time curves and an image strip with error heat-maps.
 
 use super::render::{announce_compiles, progress_bar};
-use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
+use super::{DeviceArgs, IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
 use crate::compare::{Budget, Comparison, Run, Samples, Spec, parse_samples};
 use crate::integrators::Technique;
 use crate::output::image_metadata;
 use crate::output::write_exr;
 use crate::render::{RenderOutput, RenderSettings, Renderer};
-use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::Result;
 use std::path::PathBuf;
@@ -48,12 +47,8 @@ pub struct CompareArgs {
     /// Seed of the per-sample random streams (the same for every technique).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Device index or a substring of its name (see `illum devices`). [default: the best device]
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Trace path: auto (ray queries where the device has them), rayquery or bvh.
-    #[arg(long, default_value = "auto")]
-    pub trace: TraceMode,
+    #[command(flatten)]
+    pub gpu: DeviceArgs,
     #[command(flatten)]
     pub integrator: IntegratorArgs,
     /// No progress bar or messages (the table still prints).
@@ -129,7 +124,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
         .transpose()?;
     let cancel = signal::install();
     let ctx = Context::new(&ContextOptions {
-        device: a.device.clone(),
+        device: a.gpu.device.clone(),
         validation: false,
         ..Default::default()
     })?;
@@ -137,7 +132,7 @@ pub fn run(a: &CompareArgs) -> Result<()> {
     let budget = Budget {
         time: a.time,
         seed: a.seed,
-        trace: a.trace,
+        trace: a.gpu.trace,
         reference: reference.clone(),
         cancel: Some(cancel.clone()),
     };

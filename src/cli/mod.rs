@@ -97,6 +97,18 @@ impl std::fmt::Display for Interrupted {
 
 impl std::error::Error for Interrupted {}
 
+/// The device and trace path a command renders on: render, compare and view alike.
+#[derive(clap::Args, Clone)]
+pub struct DeviceArgs {
+    /// Device index or a substring of its name (see `illum devices`). [default: the best device:
+    /// discrete, integrated, virtual, then CPU]
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Trace path: auto (ray queries where the device has them), rayquery or bvh.
+    #[arg(long, default_value = "auto")]
+    pub trace: crate::trace::TraceMode,
+}
+
 /// Scene file (or the default scene) and resolution override, shared by render and compare.
 #[derive(clap::Args, Clone)]
 pub struct SceneArgs {

@@ -1,11 +1,10 @@
 //! `illum render`: one scene to EXR (and PNG), with optional error reports.
 
-use super::{IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
+use super::{DeviceArgs, IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
 use crate::film::Window;
 use crate::output::image_metadata;
 use crate::output::{write_exr, write_png};
 use crate::render::{RenderSettings, Renderer};
-use crate::trace::TraceMode;
 use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -55,13 +54,8 @@ pub struct RenderArgs {
     /// Seed of the per-sample random streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Device index or a substring of its name (see `illum devices`). [default: the best device:
-    /// discrete, integrated, virtual, then CPU]
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Trace path: auto (ray queries where the device has them), rayquery or bvh.
-    #[arg(long, default_value = "auto")]
-    pub trace: TraceMode,
+    #[command(flatten)]
+    pub gpu: DeviceArgs,
     /// Direct lighting by BRDF sampling (brdf), light sampling (light), or both with MIS (mis).
     /// [default: mis]
     #[arg(long, value_name = "TECHNIQUE")]
@@ -194,7 +188,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         .transpose()?;
     let cancel = signal::install();
     let ctx = Context::new(&ContextOptions {
-        device: a.device.clone(),
+        device: a.gpu.device.clone(),
         validation: a.validate,
         ..Default::default()
     })?;
@@ -212,7 +206,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         spp,
         time: a.time,
         seed: a.seed,
-        trace: a.trace,
+        trace: a.gpu.trace,
         reference,
         evaluate_passes: a.report.is_some() || a.report_plot.is_some(),
         clamp: a.clamp,
@@ -515,7 +509,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
     signal::set_part_job();
     let cancel = signal::install();
     let ctx = Context::new(&ContextOptions {
-        device: a.device.clone(),
+        device: a.gpu.device.clone(),
         validation: a.validate,
         ..Default::default()
     })?;
@@ -524,7 +518,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         integrator: a.integrator.integrator(&scene, a.technique.as_deref())?,
         spp,
         seed: a.seed,
-        trace: a.trace,
+        trace: a.gpu.trace,
         clamp: a.clamp,
         memory_limit: a.memory_limit,
         adaptive,

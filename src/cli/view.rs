@@ -1,10 +1,9 @@
 //! `illum view`: the interactive window (src/view/), with render's scene, integrator and
 //! sampling options.
 
-use super::{IntegratorArgs, SceneArgs, check_outputs, signal};
+use super::{DeviceArgs, IntegratorArgs, SceneArgs, check_outputs, signal};
 use crate::render::RenderSettings;
 use crate::scene::Scene;
-use crate::trace::TraceMode;
 use crate::view::{Source, ViewOptions};
 use anyhow::{Result, bail};
 use std::path::PathBuf;
@@ -20,12 +19,8 @@ pub struct ViewArgs {
     /// Seed of the per-sample random streams (as `illum render --seed`).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Device index or a substring of its name (see `illum devices`).
-    #[arg(long)]
-    pub device: Option<String>,
-    /// Trace path: auto, rayquery or bvh.
-    #[arg(long, default_value = "auto")]
-    pub trace: TraceMode,
+    #[command(flatten)]
+    pub gpu: DeviceArgs,
     /// Direct lighting by BRDF sampling (brdf), light sampling (light), or both with MIS (mis).
     #[arg(long, value_name = "TECHNIQUE")]
     pub technique: Option<String>,
@@ -73,7 +68,7 @@ impl Source for ViewArgs {
                 .integrator(scene, self.technique.as_deref())?,
             spp: self.spp,
             seed: self.seed,
-            trace: self.trace,
+            trace: self.gpu.trace,
             clamp: self.clamp,
             ..Default::default()
         })
@@ -110,7 +105,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     let opts = ViewOptions {
         title: format!("illum view: {}", a.scene.name()),
         watch: a.scene.scene.clone(),
-        device: a.device.clone(),
+        device: a.gpu.device.clone(),
         validation: a.validate,
         frames: a.frames,
         screenshot: a.screenshot.clone(),
