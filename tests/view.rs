@@ -154,6 +154,37 @@ impl Viewer {
     }
 }
 
+/// `illum view SCENE --spp 8 --scale 1 --save-at-exit -o SAVED [--screenshot SHOT] EXTRA...`.
+fn saving_view(
+    x: &Xvfb,
+    scene: &Path,
+    saved: &Path,
+    shot: Option<&Path>,
+    extra: &[&str],
+) -> Viewer {
+    let (scene, saved) = (scene.to_str().unwrap(), saved.to_str().unwrap());
+    let mut args = vec![
+        scene,
+        "--spp",
+        "8",
+        "--scale",
+        "1",
+        "--save-at-exit",
+        "-o",
+        saved,
+    ];
+    if let Some(shot) = shot {
+        args.extend(["--screenshot", shot.to_str().unwrap()]);
+    }
+    args.extend(extra);
+    Viewer::start(x, &args)
+}
+
+/// The beauty's red channel.
+fn beauty(e: &illum::output::ExrImage) -> Vec<f32> {
+    e.channels.iter().find(|c| c.0 == "R").unwrap().1.clone()
+}
+
 fn write_scene(path: &Path, json: &str) {
     // As editors save: a new file renamed over the old one.
     let tmp = path.with_extension("json.tmp");
@@ -235,23 +266,7 @@ fn the_view_saves_and_shows_what_render_writes() {
         temp_path("converge-view.exr"),
         temp_path("converge-view.png"),
     );
-    let v = Viewer::start(
-        &x,
-        &[
-            scene.to_str().unwrap(),
-            "--spp",
-            "8",
-            "--scale",
-            "1",
-            "--frames",
-            "30",
-            "--save-at-exit",
-            "-o",
-            saved.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ],
-    );
+    let v = saving_view(&x, &scene, &saved, Some(&shot), &["--frames", "30"]);
     let (code, log) = v.wait();
     assert_eq!(code, 0, "{}", log.join("\n"));
     let (exr, png) = render(&scene, 8, "converge-render");
@@ -275,21 +290,7 @@ fn edits_show_at_once_and_a_bad_edit_keeps_the_last_good_image() {
     let x = Xvfb::start();
     let scene = scene_file("edit.json", SCENE);
     let (saved, shot) = (temp_path("edit-view.exr"), temp_path("edit-view.png"));
-    let mut v = Viewer::start(
-        &x,
-        &[
-            scene.to_str().unwrap(),
-            "--spp",
-            "8",
-            "--scale",
-            "1",
-            "--save-at-exit",
-            "-o",
-            saved.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ],
-    );
+    let mut v = saving_view(&x, &scene, &saved, Some(&shot), &[]);
     v.wait_for("8 spp done");
     // A light's colour: one table rewritten, nothing prepared again.
     let edited = SCENE.replace(r#""color": [1, 1, 1]"#, r#""color": [0.2, 0.4, 1.0]"#);
@@ -365,8 +366,6 @@ fn the_mouse_orbits_and_r_brings_the_scene_camera_back() {
     v.wait_for("saved");
     let (exr, _) = render(&scene, 8, "orbit-render");
     let moved = read(&saved);
-    let beauty =
-        |e: &illum::output::ExrImage| e.channels.iter().find(|c| c.0 == "R").unwrap().1.clone();
     assert_ne!(beauty(&moved), beauty(&exr), "the orbit moved the camera");
     xdotool(&["key", "r"]);
     v.wait_for("8 spp done");
@@ -385,23 +384,12 @@ fn the_denoised_preview_shows_the_denoised_layer() {
     let x = Xvfb::start();
     let scene = scene_file("denoise-view.json", SCENE);
     let (saved, shot) = (temp_path("denoise-view.exr"), temp_path("denoise-view.png"));
-    let v = Viewer::start(
+    let v = saving_view(
         &x,
-        &[
-            scene.to_str().unwrap(),
-            "--spp",
-            "8",
-            "--scale",
-            "1",
-            "--frames",
-            "30",
-            "--denoise",
-            "--save-at-exit",
-            "-o",
-            saved.to_str().unwrap(),
-            "--screenshot",
-            shot.to_str().unwrap(),
-        ],
+        &scene,
+        &saved,
+        Some(&shot),
+        &["--frames", "30", "--denoise"],
     );
     let (code, log) = v.wait();
     assert_eq!(code, 0, "{}", log.join("\n"));
@@ -437,8 +425,6 @@ fn the_denoised_preview_shows_the_denoised_layer() {
     assert_shows(&shot, &png, "the denoised preview");
     // The saved beauty is the render's, not the preview.
     let view = read(&saved);
-    let beauty =
-        |e: &illum::output::ExrImage| e.channels.iter().find(|c| c.0 == "R").unwrap().1.clone();
     assert_eq!(beauty(&view), beauty(&exr));
 }
 
@@ -470,19 +456,7 @@ fn an_edited_texture_shows() {
     let scene = dir.join("scene.json");
     write_scene(&scene, &json);
     let saved = dir.join("view.exr");
-    let mut v = Viewer::start(
-        &x,
-        &[
-            scene.to_str().unwrap(),
-            "--spp",
-            "8",
-            "--scale",
-            "1",
-            "--save-at-exit",
-            "-o",
-            saved.to_str().unwrap(),
-        ],
-    );
+    let mut v = saving_view(&x, &scene, &saved, None, &[]);
     v.wait_for("8 spp done");
     write_texture([40, 90, 220]);
     let applied = v.wait_for("applied the edit");
