@@ -138,12 +138,18 @@ impl View<'_> {
             }
             let plane = planes[self.plane];
             let mut name = plane.name(aovs);
-            let values = match (plane, self.denoised(p, &peek)) {
-                (Plane::Beauty, Some((image, n))) => {
+            // The denoised preview replaces the beauty only (nothing is denoised for the other
+            // planes).
+            let denoised = match plane {
+                Plane::Beauty => self.denoised(p, &peek),
+                _ => None,
+            };
+            let values = match (denoised, &self.preview) {
+                (Some(n), Some((image, ..))) => {
                     name = format!("beauty, denoised at {n} spp");
-                    image
+                    std::borrow::Cow::Borrowed(image.as_slice())
                 }
-                _ => display::values(&peek, plane, pixels),
+                _ => std::borrow::Cow::Owned(display::values(&peek, plane, pixels)),
             };
             let image = display::encode(&values, plane, self.exposure, &self.encoder);
             let status = self.status(p, spp, name);
@@ -207,9 +213,10 @@ impl View<'_> {
         }
     }
 
-    /// The denoised beauty to show, when the preview is on: denoised again at most once a
-    /// second while samples come in, and once more when the render is done.
-    fn denoised(&mut self, p: &Progressive, peek: &Peek) -> Option<(Vec<[f32; 3]>, u32)> {
+    /// When the preview is on, brings `self.preview` (the denoised beauty) up to date: denoised
+    /// again at most once a second while samples come in, and once more when the render is
+    /// done. Returns the spp it was denoised at.
+    fn denoised(&mut self, p: &Progressive, peek: &Peek) -> Option<u32> {
         let Some(Ok(d)) = self.denoiser.as_ref().filter(|_| self.denoise) else {
             return None;
         };
@@ -227,9 +234,7 @@ impl View<'_> {
                 }
             }
         }
-        self.preview
-            .as_ref()
-            .map(|(image, n, _)| (image.clone(), *n))
+        self.preview.as_ref().map(|(_, n, _)| *n)
     }
 
     /// After a frame was presented: the first frame's time, an applied edit's latency.
