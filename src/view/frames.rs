@@ -240,6 +240,7 @@ impl View<'_> {
     /// After a frame was presented: the first frame's time, an applied edit's latency.
     fn first_shown(&mut self, p: &Progressive) {
         if self.first_frame.is_none() {
+            self.ctx.set_kernel_listener(None);
             let t = self.started.elapsed().as_secs_f64();
             self.first_frame = Some(t);
             crate::note!(
