@@ -50,13 +50,13 @@ Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
     vec3 tex = texture_lookup(m.diffuse_texture, s.uv).rgb;
     sh.albedo = m.diffuse * tex;
     if ((m.flags & MATERIAL_FLAG_METALLIC_ROUGHNESS) != 0u && m.lobe_count > 0u) {
-        // glTF: metallic in B, roughness in G of the metallic-roughness texture.
+        // Metallic in B, roughness in G of the metallic-roughness texture (glTF's packing).
         vec4 mr = texture_lookup(m.metallic_roughness_texture, s.uv);
         vec3 base = m.base_metallic.rgb * tex;
         float metallic = clamp(m.base_metallic.w * mr.b, 0.0, 1.0);
         float roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
         sh.albedo = base * (1.0 - metallic);
-        m.lobes[0].fresnel0.rgb = mix(vec3(0.04), base, metallic);
+        m.lobes[0].fresnel0.rgb = mix(vec3(m.dielectric_f0), base, metallic);
         m.lobes[0].alpha = vec2(max(roughness * roughness, 1e-4));
     }
     return sh;

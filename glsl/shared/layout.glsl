@@ -100,8 +100,9 @@
 
 #define MATERIAL_FLAG_TWO_SIDED 1
 #define MATERIAL_FLAG_TANGENT_DIR 2
-// glTF metallic-roughness: diffuse, lobes[0].fresnel0 and lobes[0].alpha are re-derived per texel
-// from base_metallic, roughness and the base-colour and metallic-roughness textures.
+// Metallic-roughness (glTF, UsdPreviewSurface): diffuse, lobes[0].fresnel0 and lobes[0].alpha are
+// re-derived per texel from base_metallic, roughness, dielectric_f0 and the base-colour and
+// metallic-roughness textures.
 #define MATERIAL_FLAG_METALLIC_ROUGHNESS 4
 
 // GpuTexture.flags: the filter, and the wrap mode (TEXTURE_WRAP_*) of each axis in two bits.
@@ -306,7 +307,7 @@ struct GpuMaterial {
     uint lobe_count;
     uint metallic_roughness_texture;
     float roughness;        // glTF roughness factor (MATERIAL_FLAG_METALLIC_ROUGHNESS)
-    uint pad1;
+    float dielectric_f0;    // Schlick f0 at metallic 0 (glTF: 0.04; UsdPreviewSurface: from its ior)
     vec4 base_metallic;     // glTF base colour factor, metallic factor
     GpuLobe lobes[2];
 };

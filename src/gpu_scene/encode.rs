@@ -378,10 +378,15 @@ fn material(m: &Material) -> GpuMaterial {
             MATERIAL_FLAG_TANGENT_DIR
         } else {
             0
+        } | if m.metallic_roughness.is_some() {
+            MATERIAL_FLAG_METALLIC_ROUGHNESS
+        } else {
+            0
         },
         lobe_count: m.specular.len().min(2) as u32,
         metallic_roughness_texture: m.metallic_roughness_texture.unwrap_or(NONE),
         roughness: m.metallic_roughness.map_or(0.0, |mr| mr.roughness),
+        dielectric_f0: m.metallic_roughness.map_or(0.0, |mr| mr.dielectric_f0),
         base_metallic: m
             .metallic_roughness
             .map_or([0.0; 4], |mr| mr.base_color.extend(mr.metallic).to_array()),

@@ -276,6 +276,7 @@ impl Default for MaterialDef {
             emission_texture: None,
             two_sided: false,
             tangent: None,
+            metallic_roughness: None,
         }
     }
 }

@@ -162,6 +162,59 @@ pub struct MaterialDef {
     /// Anisotropy (tangent) direction for surfaces without tangents, projected onto the
     /// tangent plane; default: derived from the normal.
     pub tangent: Option<V3>,
+    /// The metallic-roughness model (glTF's, UsdPreviewSurface's metallic workflow): `diffuse`
+    /// and `diffuse_texture` are then the base colour, and the material has one GGX-Smith lobe
+    /// derived per texel (so `specular` must be left out).
+    pub metallic_roughness: Option<MetallicRoughnessDef>,
+}
+
+/// Metallic-roughness parameters, each optionally multiplied per texel by a texture's channel.
+/// Per texel, with base = diffuse × diffuse_texture: Lambert albedo base·(1 − metallic), one
+/// GGX-Smith lobe of alpha max(roughness², 1e-4) and Schlick f0 = mix(((ior − 1)/(ior + 1))²,
+/// base, metallic).
+#[derive(Debug, Clone, serde::Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MetallicRoughnessDef {
+    /// Metalness in [0, 1].
+    #[serde(default)]
+    pub metallic: f64,
+    /// A texture channel multiplying `metallic` (default channel: b, glTF's).
+    pub metallic_texture: Option<ChannelDef>,
+    /// Perceptual roughness in [0, 1] (alpha = roughness²).
+    #[serde(default = "default_roughness")]
+    pub roughness: f64,
+    /// A texture channel multiplying `roughness` (default channel: g, glTF's).
+    pub roughness_texture: Option<ChannelDef>,
+    /// Index of refraction of the dielectric part, >= 1 (1.5: f0 = 0.04, glTF's).
+    #[serde(default = "default_ior")]
+    pub ior: f64,
+}
+
+pub fn default_roughness() -> f64 {
+    0.5
+}
+
+pub fn default_ior() -> f64 {
+    1.5
+}
+
+/// One channel of a texture: a scalar map.
+#[derive(Debug, Clone, serde::Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelDef {
+    /// Texture name.
+    pub texture: String,
+    /// Which channel; default: the field's (glTF's packing).
+    pub channel: Option<ChannelName>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ChannelName {
+    R,
+    G,
+    B,
+    A,
 }
 
 pub fn default_diffuse() -> V3 {

@@ -82,6 +82,7 @@ impl Loader<'_> {
                 base_color: base,
                 metallic,
                 roughness,
+                dielectric_f0: 0.04,
             }),
             emission,
             emission_texture,

@@ -16,6 +16,7 @@ use super::transform;
 use super::types::*;
 
 mod light;
+mod material;
 use glam::{DMat4, Vec2, Vec3};
 use indexmap::IndexMap;
 use std::collections::HashMap;
@@ -358,91 +359,6 @@ impl Builder<'_> {
             WrapDef::Mirror => TextureWrap::Mirror,
         }; 2];
         t
-    }
-
-    fn material(&self, name: &str, def: &MaterialDef) -> Result<Material> {
-        let ctx = self.ctx;
-        let f = format!("materials.{name}");
-        if def.specular.len() > 2 {
-            return Err(ctx.err(
-                format!("{f}.specular"),
-                format!("{} lobes", def.specular.len()),
-                "at most 2 specular lobes are allowed",
-            ));
-        }
-        let specular = def
-            .specular
-            .iter()
-            .enumerate()
-            .map(|(i, lobe)| self.lobe(&format!("{f}.specular[{i}]"), lobe))
-            .collect::<Result<Vec<_>>>()?;
-        let opt_tex = |key: &str, t: &Option<String>| {
-            t.as_deref()
-                .map(|t| self.texture_ref(&format!("{f}.{key}"), t))
-                .transpose()
-        };
-        Ok(Material {
-            name: name.to_owned(),
-            diffuse: ctx.unit_rgb(&format!("{f}.diffuse"), def.diffuse)?,
-            diffuse_texture: opt_tex("diffuse_texture", &def.diffuse_texture)?,
-            specular,
-            metallic_roughness_texture: None,
-            metallic_roughness: None,
-            emission: ctx.nonneg_rgb(&format!("{f}.emission"), def.emission)?,
-            emission_texture: opt_tex("emission_texture", &def.emission_texture)?,
-            two_sided: def.two_sided,
-            tangent_direction: def
-                .tangent
-                .map(|t| {
-                    ctx.direction(&format!("{f}.tangent"), t)
-                        .map(|d| d.as_vec3())
-                })
-                .transpose()?,
-        })
-    }
-
-    fn lobe(&self, f: &str, lobe: &LobeDef) -> Result<SpecularLobe> {
-        let ctx = self.ctx;
-        let alpha = |field: String, a: f64| {
-            if (0.0..=1.0).contains(&a) {
-                Ok(a as f32)
-            } else {
-                Err(ctx.err(
-                    field,
-                    fmt_num(a),
-                    "roughness must be in [0, 1] (0: a perfect mirror)",
-                ))
-            }
-        };
-        let alpha = match lobe.roughness {
-            NumOrArray::One(a) => Vec2::splat(alpha(format!("{f}.roughness"), a)?),
-            NumOrArray::Many([t, b]) => Vec2::new(
-                alpha(format!("{f}.roughness[0]"), t)?,
-                alpha(format!("{f}.roughness[1]"), b)?,
-            ),
-        };
-        let fresnel = match &lobe.fresnel {
-            FresnelDef::Constant(c) => {
-                Fresnel::Constant(ctx.unit_rgb(&format!("{f}.fresnel.constant"), *c)?)
-            }
-            FresnelDef::Schlick(f0) => Fresnel::Schlick {
-                f0: ctx.unit_rgb(&format!("{f}.fresnel.schlick"), *f0)?,
-            },
-            FresnelDef::Conductor { eta, k } => Fresnel::Conductor {
-                eta: ctx.positive_rgb(&format!("{f}.fresnel.conductor.eta"), *eta)?,
-                k: ctx.nonneg_rgb(&format!("{f}.fresnel.conductor.k"), *k)?,
-            },
-        };
-        let distribution = match lobe.model {
-            ModelDef::Dbrdf => Distribution::DBrdf,
-            ModelDef::Beckmann => Distribution::BeckmannSmith,
-            ModelDef::Ggx => Distribution::GgxSmith,
-        };
-        Ok(SpecularLobe {
-            distribution,
-            alpha,
-            fresnel,
-        })
     }
 
     fn shape(&mut self, name: &str, def: &ShapeDef) -> Result<()> {

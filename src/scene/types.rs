@@ -215,11 +215,13 @@ pub struct Material {
     pub diffuse_texture: Option<TextureId>,
     /// At most two specular lobes (the course's look-dev materials use one or two).
     pub specular: Vec<SpecularLobe>,
-    /// glTF metallic-roughness: multiplies metallic (B) and roughness (G) per texel.
+    /// Metallic-roughness: multiplies metallic (B) and roughness (G) per texel (glTF's packing).
     pub metallic_roughness_texture: Option<TextureId>,
-    /// glTF metallic-roughness factors. When present the shader re-derives, per texel, the
-    /// diffuse albedo base·(1−metallic), the first lobe's Schlick f0 = mix(0.04, base, metallic)
-    /// and its alpha = roughness², with base = base_color × the base-colour texture.
+    /// Metallic-roughness factors (glTF, UsdPreviewSurface, the scene format's
+    /// `metallic_roughness`). When present the shader re-derives, per texel, the diffuse albedo
+    /// base·(1−metallic), the first lobe's Schlick f0 = mix(dielectric_f0, base, metallic) and its
+    /// alpha = max(roughness², 1e-4), with base = base_color × the base-colour texture
+    /// (`diffuse_texture`); `diffuse` and `specular[0]` hold the values of an untextured texel.
     pub metallic_roughness: Option<MetallicRoughness>,
     /// Emitted radiance (W·m⁻²·sr⁻¹), zero for non-emitters. Emits on the front side only
     /// (the side the geometric normal points to) unless `two_sided`.
@@ -231,12 +233,14 @@ pub struct Material {
     pub tangent_direction: Option<Vec3>,
 }
 
-/// The factors of a glTF metallic-roughness material.
+/// The factors of a metallic-roughness material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MetallicRoughness {
     pub base_color: Vec3,
     pub metallic: f32,
     pub roughness: f32,
+    /// Schlick f0 where metallic is 0: glTF's 0.04, ((ior − 1)/(ior + 1))² for an ior.
+    pub dielectric_f0: f32,
 }
 
 #[derive(Clone, Debug)]
