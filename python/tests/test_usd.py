@@ -550,6 +550,84 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path, uv):
     assert np.array_equal(render(illum.load(tmp_path / "pkg" / "tex.usdz")), a)
 
 
+def write_exr(path, px):
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                      {"RGB": np.asarray(px, dtype=np.float32)}) as f:
+        f.write(str(path))
+
+
+def test_textured_metallic_and_roughness_read_as_the_metallic_roughness_model(tmp_path):
+    """roughness and metallic connected to channels of two UsdUVTextures (G of one, R of the
+    other, with a scale) over a textured diffuseColor: the JSON twin's metallic_roughness
+    material with the same maps and channels, bit for bit; another channel gives another
+    image."""
+    write_exr(tmp_path / "albedo.exr", [[(0.9, 0.2, 0.1), (0.2, 0.8, 0.3)],
+                                        [(0.3, 0.3, 0.9), (0.8, 0.8, 0.8)]])
+    write_exr(tmp_path / "masks.exr", [[(0, 0.9, 1), (0, 0.2, 1)], [(0, 0.5, 0), (0, 0.05, 0)]])
+    write_exr(tmp_path / "metal.exr", [[(0, 1, 1), (1, 0, 0)], [(1, 1, 0), (0, 0, 1)]])
+    s = new_stage(tmp_path / "mr.usda")
+    camera(s, (0, 0, 4), size=(32, 32))
+    quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+    m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
+    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                              UsdGeom.Tokens.faceVarying)
+    st.Set([(0, 0), (1, 0), (1, 1), (0, 1)])
+    mat = UsdShade.Material.Define(s, "/Looks/Card")
+    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
+    ps.CreateIdAttr("UsdPreviewSurface")
+    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    for name, file, input, output, scale in [
+            ("Albedo", "albedo.exr", "diffuseColor", "rgb", None),
+            ("Metal", "metal.exr", "metallic", "r", 0.8),
+            ("Masks", "masks.exr", "roughness", "g", None)]:
+        tex = UsdShade.Shader.Define(s, f"/Looks/Card/{name}")
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(file)
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
+            reader.ConnectableAPI(), "result")
+        if scale is not None:
+            tex.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((scale,) * 4)
+        kind = Sdf.ValueTypeNames.Color3f if output == "rgb" else Sdf.ValueTypeNames.Float
+        ps.CreateInput(input, kind).ConnectToSource(tex.ConnectableAPI(), output)
+    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
+    bind(m, mat)
+    UsdLux.DomeLight.Define(s, "/Sky")
+    key = UsdLux.SphereLight.Define(s, "/Key")
+    key.CreateRadiusAttr(0.2)
+    key.CreateIntensityAttr(30)
+    UsdGeom.XformCommonAPI(key).SetTranslate((1, 1, 2))
+    s.Save()
+
+    def twin_with(metal_channel):
+        return twin({
+            "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
+            "textures": {"albedo": {"file": "albedo.exr"}, "metal": {"file": "metal.exr"},
+                         "masks": {"file": "masks.exr"}},
+            "materials": {"card": {"diffuse": [1, 1, 1], "diffuse_texture": "albedo",
+                                   "metallic_roughness": {
+                                       "metallic": F32(0.8),
+                                       "metallic_texture": {"texture": "metal",
+                                                            "channel": metal_channel},
+                                       "roughness": 1,
+                                       "roughness_texture": {"texture": "masks", "channel": "g"}}}},
+            "shapes": {"card": {"mesh": {"positions": [list(p) for p in quad],
+                                         "indices": [0, 1, 2, 0, 2, 3],
+                                         "uvs": [[0, 1], [1, 1], [1, 0], [0, 0]]},
+                                "material": "card"}},
+            "lights": {"sky": {"dome": {"rotation": 180}},
+                       "key": {"sphere": {"center": [1, 1, 2], "radius": F32(0.2)},
+                               "intensity": 30}},
+        }, tmp_path)
+
+    stage = illum.load(tmp_path / "mr.usda")
+    assert stage.warnings == []
+    a = render(stage, spp=8)
+    assert np.array_equal(a, render(twin_with("r"), spp=8))
+    assert not np.array_equal(a, render(twin_with("b"), spp=8))
+
+
 BOX_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),
               (-0.5, 1, -0.5), (0.5, 1, -0.5), (0.5, 1, 0.5), (-0.5, 1, 0.5)]
 BOX_FACES = [0, 1, 2, 3, 4, 7, 6, 5, 0, 4, 5, 1, 1, 5, 6, 2, 2, 6, 7, 3, 3, 7, 4, 0]

@@ -6,7 +6,10 @@
 //! diffuseColor by metallic (the specular workflow: f0 = specularColor, diffuse = diffuseColor).
 
 use super::{Reader, Result, value};
-use crate::scene::format::{FresnelDef, LobeDef, MaterialDef, ModelDef, NumOrArray, WrapDef};
+use crate::scene::format::{
+    ChannelDef, ChannelName, FresnelDef, LobeDef, MaterialDef, MetallicRoughnessDef, ModelDef,
+    NumOrArray, WrapDef,
+};
 use openusd::schemas::shade::MaterialBindingAPI;
 use openusd::sdf::{self, Value};
 
@@ -168,10 +171,8 @@ impl Reader {
         let diffuse_in = self.color_input(&shader, "diffuseColor", FALLBACK_GREY)?;
         let emission_in = self.color_input(&shader, "emissiveColor", [0.0; 3])?;
         let specular = self.plain_color(&shader, "specularColor", [0.0; 3])?;
-        let metallic = self.plain_number(&shader, "metallic", 0.0)?.clamp(0.0, 1.0);
-        let roughness = self
-            .plain_number(&shader, "roughness", 0.5)?
-            .clamp(0.0, 1.0);
+        let (metallic, metallic_tex) = self.number_input(&shader, "metallic", 0.0)?;
+        let (roughness, roughness_tex) = self.number_input(&shader, "roughness", 0.5)?;
         let ior = self.plain_number(&shader, "ior", 1.5)?;
         let opacity = self.plain_number(&shader, "opacity", 1.0)?;
         if opacity != 1.0 {
@@ -208,18 +209,43 @@ impl Reader {
         // A textured colour is the texture times its `scale`, which illum's constant carries.
         let (base, diffuse_tex) = diffuse_in;
         let (emission, emission_tex) = emission_in;
+        let textured_scalar = metallic_tex.is_some() || roughness_tex.is_some();
+        if specular_workflow && textured_scalar {
+            let input = if roughness_tex.is_some() {
+                "roughness"
+            } else {
+                "metallic"
+            };
+            return Err(self.unsupported(
+                &shader,
+                &format!("inputs:{input}"),
+                "a textured roughness or metallic is read in the metallic workflow only \
+                 (useSpecularWorkflow 0)",
+            ));
+        }
+        if !specular_workflow && (textured_scalar || diffuse_tex.is_some() && metallic > 0.0) {
+            // Per texel: glTF's metallic-roughness model, which illum's shader derives.
+            if !(ior.is_finite() && ior >= 1.0) {
+                return Err(self.invalid(&shader, "inputs:ior", ior, "must be >= 1"));
+            }
+            return Ok(MaterialDef {
+                diffuse: base.map(|c| c.clamp(0.0, 1.0)),
+                diffuse_texture: diffuse_tex,
+                emission,
+                emission_texture: emission_tex,
+                metallic_roughness: Some(MetallicRoughnessDef {
+                    metallic,
+                    metallic_texture: metallic_tex,
+                    roughness,
+                    roughness_texture: roughness_tex,
+                    ior,
+                }),
+                ..Default::default()
+            });
+        }
         let (diffuse, f0) = if specular_workflow {
             (base, specular)
         } else {
-            if diffuse_tex.is_some() && metallic > 0.0 {
-                return Err(self.invalid(
-                    &shader,
-                    "inputs:metallic",
-                    metallic,
-                    "with a textured diffuseColor, the metallic f0 would need a texture of its \
-                     own: illum renders textured dielectrics (metallic 0) only",
-                ));
-            }
             let dielectric = ((ior - 1.0) / (ior + 1.0)).powi(2);
             (
                 base.map(|c| c * (1.0 - metallic)),
@@ -238,7 +264,68 @@ impl Reader {
             emission_texture: emission_tex,
             two_sided: false,
             tangent: None,
+            metallic_roughness: None,
         })
+    }
+
+    /// A number input in [0, 1] that may be a texture's channel: (constant, channel). The
+    /// constant of a textured input is the texture's `scale` of that channel.
+    fn number_input(
+        &mut self,
+        shader: &sdf::Path,
+        input: &str,
+        fallback: f64,
+    ) -> Result<(f64, Option<ChannelDef>)> {
+        let attr = format!("inputs:{input}");
+        let (value, channel) = match self.source(shader, &attr)? {
+            Source::Shader(tex, output) => {
+                let c = match output.as_str() {
+                    "outputs:r" => ChannelName::R,
+                    "outputs:g" => ChannelName::G,
+                    "outputs:b" => ChannelName::B,
+                    "outputs:a" => ChannelName::A,
+                    _ => {
+                        return Err(self.unsupported(
+                            shader,
+                            &attr,
+                            format!(
+                                "connected to {}.{output}: a number input reads one channel of \
+                                 a UsdUVTexture (outputs:r, g, b or a)",
+                                tex.as_str()
+                            ),
+                        ));
+                    }
+                };
+                let (name, scale) = self.uv_texture(shader, &attr, &tex, &output)?;
+                let k = c as usize;
+                let channel = name.map(|texture| ChannelDef {
+                    texture,
+                    channel: Some(c),
+                });
+                (scale[k], channel)
+            }
+            Source::Unset => return Ok((fallback, None)),
+            Source::Value(v) => match value::scalar(&v) {
+                Some(x) if x.is_finite() => (x.clamp(0.0, 1.0), None),
+                _ => {
+                    return Err(self.invalid(
+                        shader,
+                        &attr,
+                        value::show(&v),
+                        "expected a finite number",
+                    ));
+                }
+            },
+        };
+        if !(0.0..=1.0).contains(&value) {
+            return Err(self.invalid(
+                shader,
+                &attr,
+                value,
+                "the texture's scale must keep the input in [0, 1]",
+            ));
+        }
+        Ok((value, channel))
     }
 
     /// A colour input that may be textured: (constant, texture name).
@@ -251,8 +338,19 @@ impl Reader {
         let attr = format!("inputs:{input}");
         match self.source(shader, &attr)? {
             Source::Shader(tex, output) => {
-                let (name, constant) = self.uv_texture(shader, &attr, &tex, &output)?;
-                Ok((constant, name))
+                if output != "outputs:rgb" {
+                    return Err(self.unsupported(
+                        shader,
+                        &attr,
+                        format!(
+                            "connected to {}.{output}: a colour input reads a UsdUVTexture's \
+                             outputs:rgb",
+                            tex.as_str()
+                        ),
+                    ));
+                }
+                let (name, s) = self.uv_texture(shader, &attr, &tex, &output)?;
+                Ok(([s[0], s[1], s[2]], name))
             }
             other => Ok((self.color_of(shader, &attr, other, fallback)?, None)),
         }
@@ -336,30 +434,36 @@ impl Reader {
         }
     }
 
-    /// The `UsdUVTexture` `tex` that `shader.attr` connects to (its `output`), as a texture of
-    /// the scene (its name) and its `scale`; without a file, no texture and its `fallback`.
-    /// Its `st` must come from a
-    /// `UsdPrimvarReader_float2` of `st`, the primvar meshes give; `bias`, a `black` wrap and
-    /// unequal wraps are errors.
+    /// The `UsdUVTexture` `tex` that `shader.attr` connects to (its `output`: `rgb` or one
+    /// channel), as a texture of the scene (its name) and its `scale`; without a file, no
+    /// texture and its `fallback` as the scale. Its `st` must come from a
+    /// `UsdPrimvarReader_float2` of `st`, the primvar meshes give; a `bias` on the channels
+    /// read, a `black` wrap and unequal wraps are errors.
     fn uv_texture(
         &mut self,
         shader: &sdf::Path,
         attr: &str,
         tex: &sdf::Path,
         output: &str,
-    ) -> Result<(Option<String>, [f64; 3])> {
+    ) -> Result<(Option<String>, [f64; 4])> {
         let id = self.shader_id(tex)?;
-        if id != "UsdUVTexture" || output != "outputs:rgb" {
+        if id != "UsdUVTexture" {
             return Err(self.unsupported(
                 shader,
                 attr,
                 format!(
-                    "connected to {}.{output} ({id:?}): a colour input reads a UsdUVTexture's \
-                     outputs:rgb",
+                    "connected to {}.{output} ({id:?}): illum reads UsdUVTexture outputs",
                     tex.as_str()
                 ),
             ));
         }
+        let read: &[usize] = match output {
+            "outputs:r" => &[0],
+            "outputs:g" => &[1],
+            "outputs:b" => &[2],
+            "outputs:a" => &[3],
+            _ => &[0, 1, 2],
+        };
         let four = |r: &mut Self, attr: &str, fallback: [f64; 4]| -> Result<[f64; 4]> {
             Ok(match r.node_value(tex, attr)? {
                 None => fallback,
@@ -375,7 +479,7 @@ impl Reader {
             Some(Value::AssetPath(_)) | None => {
                 // No image: the texture gives its fallback.
                 let f = four(self, "inputs:fallback", [0.0, 0.0, 0.0, 1.0])?;
-                return Ok((None, [f[0], f[1], f[2]]));
+                return Ok((None, f));
             }
             Some(v) => {
                 return Err(self.invalid(
@@ -428,7 +532,7 @@ impl Reader {
         };
         let scale = four(self, "inputs:scale", [1.0; 4])?;
         let bias = four(self, "inputs:bias", [0.0; 4])?;
-        if bias[..3].iter().any(|&b| b != 0.0) {
+        if read.iter().any(|&c| bias[c] != 0.0) {
             return Err(self.invalid(
                 tex,
                 "inputs:bias",
@@ -483,7 +587,7 @@ impl Reader {
         );
         let wrap = wraps[0];
         self.add_texture(&name, file, bytes, srgb, wrap);
-        Ok((Some(name), [scale[0], scale[1], scale[2]]))
+        Ok((Some(name), scale))
     }
 }
 
