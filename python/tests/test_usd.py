@@ -628,6 +628,35 @@ def test_textured_metallic_and_roughness_read_as_the_metallic_roughness_model(tm
     assert not np.array_equal(a, render(twin_with("b"), spp=8))
 
 
+@pytest.mark.parametrize("mirrored", [False, True])
+def test_a_rect_light_s_texture_lies_as_usdlux_lays_it(tmp_path, mirrored):
+    """UsdLux puts a RectLight texture's first texel at local (+X, +Y) and its last at (-X, -Y)
+    (as pxr's hdEmbree samples it): seen from the side it lights, the image reads upright; a
+    transform that mirrors the light mirrors the image."""
+    quadrants = {(0, 0): (1, 0, 0), (0, 1): (0, 1, 0), (1, 0): (0, 0, 1), (1, 1): (1, 1, 1)}
+    px = np.zeros((64, 64, 3), dtype=np.float32)
+    for (r, c), colour in quadrants.items():
+        px[32 * r:32 * r + 32, 32 * c:32 * c + 32] = colour
+    write_exr(tmp_path / "quads.exr", px)
+    s = new_stage(tmp_path / "rect.usda")
+    # The light emits along -Z: the camera at -Z looks back along +Z.
+    camera(s, (0, 0, -12), size=(16, 16), rotate=(0, 180, 0), focal=50)
+    light = UsdLux.RectLight.Define(s, "/Panel")
+    light.CreateTextureFileAttr("quads.exr")
+    light.CreateWidthAttr(4)
+    light.CreateHeightAttr(4)
+    if mirrored:
+        UsdGeom.XformCommonAPI(light).SetScale((-1, 1, 1))
+    s.Save()
+    stage = illum.load(tmp_path / "rect.usda")
+    assert stage.warnings == []
+    img = render(stage, spp=1)
+    for (r, c), colour in quadrants.items():
+        cc = 1 - c if mirrored else c
+        seen = img[8 * r + 3:8 * r + 6, 8 * cc + 3:8 * cc + 6].mean(axis=(0, 1))
+        assert np.allclose(seen, colour, atol=1e-6), ((r, c), seen, colour)
+
+
 BOX_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),
               (-0.5, 1, -0.5), (0.5, 1, -0.5), (0.5, 1, 0.5), (-0.5, 1, 0.5)]
 BOX_FACES = [0, 1, 2, 3, 4, 7, 6, 5, 0, 4, 5, 1, 1, 5, 6, 2, 2, 6, 7, 3, 3, 7, 4, 0]

@@ -129,6 +129,7 @@ impl SceneBuilder {
                 rgba: rgba.to_vec(),
             }),
             bytes: None,
+            mirror_u: false,
         };
         self.texture(name, def)
     }

@@ -104,6 +104,11 @@ pub struct TextureDef {
     #[serde(skip)]
     #[schemars(skip)]
     pub bytes: Option<Vec<u8>>,
+    /// Mirror the image left to right on load (a UsdLux rect light's texture, which its
+    /// rectangle shows mirrored against illum's rect uvs). Not part of the file format.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub mirror_u: bool,
 }
 
 /// An image in host memory: `rgba` holds width × height RGBA texels, row-major, top row first.

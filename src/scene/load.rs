@@ -347,8 +347,13 @@ impl Builder<'_> {
         Ok(self.sampled(t, def))
     }
 
-    /// The filter and wrap modes of `def`.
+    /// The filter and wrap modes of `def` (and its mirroring).
     fn sampled(&self, mut t: Texture, def: &TextureDef) -> Texture {
+        if def.mirror_u {
+            for row in t.texels.chunks_exact_mut(t.width as usize) {
+                row.reverse();
+            }
+        }
         t.filter = match def.filter {
             FilterDef::Bilinear => TextureFilter::Bilinear,
             FilterDef::Nearest => TextureFilter::Nearest,

@@ -125,11 +125,13 @@ impl Reader {
             shadows: None,
         };
         let texture = self.texture_file(prim)?;
-        if texture.is_some() && kind != "DomeLight" && kind != "DomeLight_1" {
+        if texture.is_some() && !matches!(kind, "DomeLight" | "DomeLight_1" | "RectLight") {
             return Err(self.unsupported(
                 prim,
                 "inputs:texture:file",
-                format!("textures on a {kind} are not read yet (a DomeLight's are)"),
+                format!(
+                    "textures on a {kind} are not read yet (a DomeLight's and RectLight's are)"
+                ),
             ));
         }
         match kind {
@@ -147,11 +149,25 @@ impl Reader {
                 if normalize && size[0] * size[1] > 0.0 {
                     intensity /= size[0] * size[1];
                 }
+                let normal = self.plane_normal(&f);
+                let mut up = f.y;
+                if let Some(name) = &texture {
+                    // UsdLux puts the image's first texel at local (+X, +Y) and its last at
+                    // (-X, -Y). illum's rect uvs start at -u/2 - v/2 with rows along v: so v
+                    // runs along -Y, and where u then runs along +X the image is mirrored.
+                    up = -f.y;
+                    let u = up.cross(normal);
+                    let mirror = u.dot(-f.x) < 0.0;
+                    if let Some(t) = self.out.textures.0.get_mut(name) {
+                        t.mirror_u = mirror;
+                    }
+                    def.texture = texture.clone();
+                }
                 def.rect = Some(RectDef {
                     center: f.center.to_array(),
-                    normal: self.plane_normal(&f).to_array(),
+                    normal: normal.to_array(),
                     size,
-                    up: Some(f.y.to_array()),
+                    up: Some(up.to_array()),
                 });
             }
             "DiskLight" => {

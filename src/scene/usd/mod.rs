@@ -327,6 +327,7 @@ impl Reader {
                 wrap,
                 pixels: None,
                 bytes,
+                mirror_u: false,
             });
     }
 

@@ -373,7 +373,7 @@ impl Reader {
                 shader,
                 attr,
                 format!(
-                    "connected to {}.{o}: only diffuseColor and emissiveColor textures are read yet",
+                    "connected to {}.{o}: textures are read on diffuseColor, emissiveColor, metallic and roughness only",
                     p.as_str()
                 ),
             )),
@@ -405,7 +405,7 @@ impl Reader {
                 shader,
                 &attr,
                 format!(
-                    "connected to {}.{o}: only diffuseColor and emissiveColor textures are read yet",
+                    "connected to {}.{o}: textures are read on diffuseColor, emissiveColor, metallic and roughness only",
                     p.as_str()
                 ),
             )),
