@@ -657,6 +657,71 @@ def test_a_rect_light_s_texture_lies_as_usdlux_lays_it(tmp_path, mirrored):
         assert np.allclose(seen, colour, atol=1e-6), ((r, c), seen, colour)
 
 
+def test_a_transform2d_moves_texture_coordinates_as_the_preview_surface_spec_says(tmp_path):
+    """UsdTransform2d between the primvar reader and the texture: st' = R(rotation) (scale st)
+    + translation (UsdPreviewSurface's order), computed here, then flipped to illum's uvs: the
+    stage renders as the JSON twin whose uvs hold st' (to float rounding of the rotation)."""
+    write_exr(tmp_path / "albedo.exr", [[(0.9, 0.2, 0.1), (0.2, 0.8, 0.3), (0.1, 0.1, 0.9)],
+                                        [(0.3, 0.3, 0.9), (0.8, 0.8, 0.8), (0.9, 0.9, 0.1)]])
+    rotation, scale, translation = 30.0, (2.0, 1.5), (0.25, -0.5)
+    st = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    s = new_stage(tmp_path / "xf2d.usda")
+    camera(s, (0, 0, 4), size=(32, 32))
+    quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+    m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
+    UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                         UsdGeom.Tokens.faceVarying).Set(st)
+    mat = UsdShade.Material.Define(s, "/Looks/Card")
+    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
+    ps.CreateIdAttr("UsdPreviewSurface")
+    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    xf = UsdShade.Shader.Define(s, "/Looks/Card/Place")
+    xf.CreateIdAttr("UsdTransform2d")
+    xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(),
+                                                                    "result")
+    xf.CreateInput("rotation", Sdf.ValueTypeNames.Float).Set(rotation)
+    xf.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set(scale)
+    xf.CreateInput("translation", Sdf.ValueTypeNames.Float2).Set(translation)
+    tex = UsdShade.Shader.Define(s, "/Looks/Card/Image")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("albedo.exr")
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(xf.ConnectableAPI(), "result")
+    ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        tex.ConnectableAPI(), "rgb")
+    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
+    bind(m, mat)
+    UsdLux.DomeLight.Define(s, "/Sky")
+    s.Save()
+
+    def placed(p):
+        a = math.radians(rotation)
+        x, y = p[0] * scale[0], p[1] * scale[1]
+        u = math.cos(a) * x - math.sin(a) * y + translation[0]
+        v = math.sin(a) * x + math.cos(a) * y + translation[1]
+        return [u, 1 - v]
+
+    # The corners as the mesh's vertices are laid out in the twin: one per face corner.
+    d = {
+        "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
+        "textures": {"albedo": {"file": "albedo.exr"}},
+        "materials": {"card": {**ggx((1, 1, 1), 0.5), "diffuse_texture": "albedo"}},
+        "shapes": {"card": {"mesh": {"positions": [list(p) for p in quad],
+                                     "indices": [0, 1, 2, 0, 2, 3],
+                                     "uvs": [placed(p) for p in st]},
+                            "material": "card"}},
+        "lights": {"sky": {"dome": {"rotation": 180}}},
+    }
+    stage = illum.load(tmp_path / "xf2d.usda")
+    assert stage.warnings == []
+    a = render(stage)
+    b = render(twin(d, tmp_path))
+    assert np.abs(a - b).max() <= 1e-5 * np.abs(b).max(), np.abs(a - b).max()
+    d["shapes"]["card"]["mesh"]["uvs"] = [[p[0], 1 - p[1]] for p in st]
+    assert np.abs(a - render(twin(d, tmp_path))).max() > 0.05
+
+
 BOX_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),
               (-0.5, 1, -0.5), (0.5, 1, -0.5), (0.5, 1, 0.5), (-0.5, 1, 0.5)]
 BOX_FACES = [0, 1, 2, 3, 4, 7, 6, 5, 0, 4, 5, 1, 1, 5, 6, 2, 2, 6, 7, 3, 3, 7, 4, 0]

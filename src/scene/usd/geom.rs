@@ -3,7 +3,7 @@
 //! exact triangles). Meshes keep their local points and carry the world transform.
 
 use super::xform::row_major;
-use super::{Reader, Result, value};
+use super::{Reader, Result, TexCoords, value};
 use crate::scene::format::{MeshDef, ShapeDef, SphereDef, TransformDef};
 use glam::{DMat4, DVec3};
 use openusd::sdf;
@@ -58,7 +58,7 @@ impl Reader {
         &mut self,
         prim: &sdf::Path,
         at: &Place,
-        build: impl FnOnce(&mut Self, &str) -> Result<Option<MeshDef>>,
+        build: impl FnOnce(&mut Self, &TexCoords) -> Result<Option<MeshDef>>,
     ) -> Result<()> {
         let double_sided = self.boolean(prim, "doubleSided", false)?;
         let material = self.material(prim, double_sided)?;
@@ -66,7 +66,7 @@ impl Reader {
             .texcoord_of
             .get(&material)
             .cloned()
-            .unwrap_or_else(|| "st".to_string());
+            .unwrap_or_else(TexCoords::st);
         let transform = Some(TransformDef {
             matrix: Some(row_major(at.world)),
             ..Default::default()
@@ -126,8 +126,8 @@ impl Reader {
     }
 
     /// A Mesh prim's triangles, or None (with a warning) when it has none.
-    /// `st` names the texture-coordinate primvar its material reads (`primvars:<st>`).
-    fn read_mesh(&mut self, prim: &sdf::Path, st: &str) -> Result<Option<MeshDef>> {
+    /// `coords` are the texture coordinates its material reads (`primvars:<primvar>`).
+    fn read_mesh(&mut self, prim: &sdf::Path, coords: &TexCoords) -> Result<Option<MeshDef>> {
         let points = self.vec3s(prim, "points")?;
         let counts = self.ints(prim, "faceVertexCounts")?;
         let indices = self.ints(prim, "faceVertexIndices")?;
@@ -175,7 +175,7 @@ impl Reader {
             Some(n) => Some(n),
             None => self.primvar_n(prim, "normals", value::vec3_array, sizes)?,
         };
-        let st_attr = format!("primvars:{st}");
+        let st_attr = format!("primvars:{}", coords.primvar);
         let st = self.primvar_n(prim, &st_attr, value::vec2_array, sizes)?;
         let per_point = |i: Option<Interp>| i.is_none_or(|i| i == Interp::Vertex);
         let shared = per_point(normals.as_ref().map(|n| n.interp))
@@ -192,7 +192,7 @@ impl Reader {
             start += c as usize;
         }
         let point = |k: usize| indices[k] as usize;
-        let flip = |[u, v]: [f64; 2]| [u, 1.0 - v];
+        let flip = |st: [f64; 2]| coords.uv(st);
         let mesh = if shared {
             MeshDef {
                 indices: Some(tris.iter().map(|&k| point(k as usize) as u32).collect()),

@@ -11,6 +11,7 @@ mod instancer;
 mod lux;
 mod quadric;
 mod shade;
+mod texture;
 mod value;
 mod xform;
 
@@ -53,12 +54,55 @@ pub(crate) struct Reader {
     materials: HashMap<String, String>,
     /// The shape that holds the mesh of each (prototype prim, material), for instances.
     instanced: HashMap<String, String>,
-    /// The texture-coordinate primvar (its name after `primvars:`) each material's textures
-    /// read; `texcoords` is the one of the material being read.
-    texcoord_of: HashMap<String, String>,
-    texcoords: Option<String>,
+    /// The texture coordinates each material's textures read; `texcoords` are those of the
+    /// material being read.
+    texcoord_of: HashMap<String, TexCoords>,
+    texcoords: Option<TexCoords>,
     cameras: Vec<sdf::Path>,
     render_settings: Vec<sdf::Path>,
+}
+
+/// The texture coordinates a material reads: a mesh primvar (its name after `primvars:`), and
+/// the `UsdTransform2d` between it and the textures, if any.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct TexCoords {
+    pub primvar: String,
+    /// st' = R(rotation) (scale · st) + translation, UsdTransform2d's order.
+    pub transform: Option<Transform2d>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Transform2d {
+    pub rotation_deg: f64,
+    pub scale: [f64; 2],
+    pub translation: [f64; 2],
+}
+
+impl Transform2d {
+    pub fn apply(&self, [s, t]: [f64; 2]) -> [f64; 2] {
+        let (sin, cos) = self.rotation_deg.to_radians().sin_cos();
+        let (x, y) = (s * self.scale[0], t * self.scale[1]);
+        [
+            cos * x - sin * y + self.translation[0],
+            sin * x + cos * y + self.translation[1],
+        ]
+    }
+}
+
+impl TexCoords {
+    /// The primvar st meshes give when no material names one.
+    pub fn st() -> TexCoords {
+        TexCoords {
+            primvar: "st".to_string(),
+            transform: None,
+        }
+    }
+
+    /// illum's uv of a USD st (transformed first): USD's t runs up from the image's bottom.
+    pub fn uv(&self, st: [f64; 2]) -> [f64; 2] {
+        let [u, v] = self.transform.map_or(st, |t| t.apply(st));
+        [u, 1.0 - v]
+    }
 }
 
 /// Reads the stage at `path` into scene-file structures, with the warnings it gives.

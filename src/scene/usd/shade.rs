@@ -8,7 +8,7 @@
 use super::{Reader, Result, value};
 use crate::scene::format::{
     ChannelDef, ChannelName, FresnelDef, LobeDef, MaterialDef, MetallicRoughnessDef, ModelDef,
-    NumOrArray, WrapDef,
+    NumOrArray,
 };
 use openusd::schemas::shade::MaterialBindingAPI;
 use openusd::sdf::{self, Value};
@@ -22,7 +22,7 @@ const MAX_HOPS: usize = 32;
 
 /// Where a shading input's value comes from, once connections through node graphs and
 /// material interface inputs are followed.
-enum Source {
+pub(super) enum Source {
     Unset,
     Value(Value),
     /// An output of a Shader prim: (prim, output name).
@@ -112,7 +112,7 @@ impl Reader {
 
     /// The source of `prim.attr`: its value, or what its connections lead to through node
     /// graph and material inputs and outputs.
-    fn source(&mut self, prim: &sdf::Path, attr: &str) -> Result<Source> {
+    pub(super) fn source(&mut self, prim: &sdf::Path, attr: &str) -> Result<Source> {
         let (mut prim, mut attr) = (prim.clone(), attr.to_string());
         for _ in 0..MAX_HOPS {
             let path = prim
@@ -151,7 +151,7 @@ impl Reader {
         ))
     }
 
-    fn shader_id(&mut self, shader: &sdf::Path) -> Result<String> {
+    pub(super) fn shader_id(&mut self, shader: &sdf::Path) -> Result<String> {
         self.token(shader, "info:id", "")
     }
 
@@ -413,7 +413,7 @@ impl Reader {
     }
 
     /// A value input of a node, through interface connections: its value or `fallback`.
-    fn node_value(&mut self, node: &sdf::Path, attr: &str) -> Result<Option<Value>> {
+    pub(super) fn node_value(&mut self, node: &sdf::Path, attr: &str) -> Result<Option<Value>> {
         match self.source(node, attr)? {
             Source::Unset => Ok(None),
             Source::Value(v) => Ok(Some(v)),
@@ -425,169 +425,18 @@ impl Reader {
         }
     }
 
-    fn node_token(&mut self, node: &sdf::Path, attr: &str, fallback: &str) -> Result<String> {
+    pub(super) fn node_token(
+        &mut self,
+        node: &sdf::Path,
+        attr: &str,
+        fallback: &str,
+    ) -> Result<String> {
         match self.node_value(node, attr)? {
             None => Ok(fallback.to_string()),
             Some(v) => value::token(&v)
                 .map(str::to_string)
                 .ok_or_else(|| self.invalid(node, attr, value::show(&v), "expected a token")),
         }
-    }
-
-    /// The `UsdUVTexture` `tex` that `shader.attr` connects to (its `output`: `rgb` or one
-    /// channel), as a texture of the scene (its name) and its `scale`; without a file, no
-    /// texture and its `fallback` as the scale. Its `st` must come from a
-    /// `UsdPrimvarReader_float2` of `st`, the primvar meshes give; a `bias` on the channels
-    /// read, a `black` wrap and unequal wraps are errors.
-    fn uv_texture(
-        &mut self,
-        shader: &sdf::Path,
-        attr: &str,
-        tex: &sdf::Path,
-        output: &str,
-    ) -> Result<(Option<String>, [f64; 4])> {
-        let id = self.shader_id(tex)?;
-        if id != "UsdUVTexture" {
-            return Err(self.unsupported(
-                shader,
-                attr,
-                format!(
-                    "connected to {}.{output} ({id:?}): illum reads UsdUVTexture outputs",
-                    tex.as_str()
-                ),
-            ));
-        }
-        let read: &[usize] = match output {
-            "outputs:r" => &[0],
-            "outputs:g" => &[1],
-            "outputs:b" => &[2],
-            "outputs:a" => &[3],
-            _ => &[0, 1, 2],
-        };
-        let four = |r: &mut Self, attr: &str, fallback: [f64; 4]| -> Result<[f64; 4]> {
-            Ok(match r.node_value(tex, attr)? {
-                None => fallback,
-                Some(Value::Vec4f(v)) => [v.x, v.y, v.z, v.w].map(f64::from),
-                Some(Value::Vec4d(v)) => [v.x, v.y, v.z, v.w],
-                Some(v) => return Err(r.invalid(tex, attr, value::show(&v), "expected float4")),
-            })
-        };
-        let (file, bytes) = match self.node_value(tex, "inputs:file")? {
-            Some(Value::AssetPath(a)) if !a.as_str().is_empty() => {
-                self.asset_file(tex, "inputs:file", &a)
-            }
-            Some(Value::AssetPath(_)) | None => {
-                // No image: the texture gives its fallback.
-                let f = four(self, "inputs:fallback", [0.0, 0.0, 0.0, 1.0])?;
-                return Ok((None, f));
-            }
-            Some(v) => {
-                return Err(self.invalid(
-                    tex,
-                    "inputs:file",
-                    value::show(&v),
-                    "expected an asset path",
-                ));
-            }
-        };
-        let mut wraps = Vec::new();
-        for attr in ["inputs:wrapS", "inputs:wrapT"] {
-            wraps.push(match self.node_token(tex, attr, "useMetadata")?.as_str() {
-                // The file's own wrap metadata is not read: repeat, the usual default.
-                "repeat" | "useMetadata" => WrapDef::Repeat,
-                "clamp" => WrapDef::Clamp,
-                "mirror" => WrapDef::Mirror,
-                other => {
-                    return Err(self.invalid(
-                        tex,
-                        attr,
-                        other,
-                        "illum wraps repeat, clamp or mirror",
-                    ));
-                }
-            });
-        }
-        if std::mem::discriminant(&wraps[0]) != std::mem::discriminant(&wraps[1]) {
-            return Err(self.unsupported(
-                tex,
-                "inputs:wrapT",
-                "differs from inputs:wrapS: illum wraps both axes alike",
-            ));
-        }
-        let srgb = match self
-            .node_token(tex, "inputs:sourceColorSpace", "auto")?
-            .as_str()
-        {
-            "auto" => None,
-            "sRGB" => Some(true),
-            "raw" => Some(false),
-            other => {
-                return Err(self.invalid(
-                    tex,
-                    "inputs:sourceColorSpace",
-                    other,
-                    "expected auto, sRGB or raw",
-                ));
-            }
-        };
-        let scale = four(self, "inputs:scale", [1.0; 4])?;
-        let bias = four(self, "inputs:bias", [0.0; 4])?;
-        if read.iter().any(|&c| bias[c] != 0.0) {
-            return Err(self.invalid(
-                tex,
-                "inputs:bias",
-                format!("{bias:?}"),
-                "illum's textures take a scale only (bias 0)",
-            ));
-        }
-        // Texture coordinates: the mesh's `st`, through a primvar reader.
-        let reader = match self.source(tex, "inputs:st")? {
-            Source::Shader(p, _) => p,
-            _ => {
-                return Err(self.invalid(
-                    tex,
-                    "inputs:st",
-                    "not connected",
-                    "must connect to a UsdPrimvarReader_float2 (texture coordinates)",
-                ));
-            }
-        };
-        let id = self.shader_id(&reader)?;
-        let var = self.node_token(&reader, "inputs:varname", "")?;
-        if id != "UsdPrimvarReader_float2" || var.is_empty() {
-            return Err(self.unsupported(
-                tex,
-                "inputs:st",
-                format!(
-                    "connected to {} ({id:?} of {var:?}): illum maps textures by a mesh \
-                     primvar, through a UsdPrimvarReader_float2 that names it",
-                    reader.as_str()
-                ),
-            ));
-        }
-        // One set of texture coordinates per material: the meshes give that primvar.
-        match &self.texcoords {
-            Some(other) if *other != var => {
-                return Err(self.unsupported(
-                    &reader,
-                    "inputs:varname",
-                    format!("reads {var:?}, another texture of the material {other:?}: illum gives a mesh one set of texture coordinates"),
-                ));
-            }
-            _ => self.texcoords = Some(var),
-        }
-        let name = format!(
-            "{}{}",
-            tex.as_str(),
-            match srgb {
-                None => "",
-                Some(true) => " (sRGB)",
-                Some(false) => " (raw)",
-            }
-        );
-        let wrap = wraps[0];
-        self.add_texture(&name, file, bytes, srgb, wrap);
-        Ok((Some(name), scale))
     }
 }
 
