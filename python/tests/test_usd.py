@@ -860,6 +860,18 @@ def test_point_instancers_place_their_prototypes_as_pxr_does(tmp_path):
     np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6)
     p = cli("render", tmp_path / "pi.usda", "-o", tmp_path / "pi.exr", "--spp", 1)
     assert p.returncode == 0 and "(12 triangles;" in p.stderr, p.stderr
+    # inactiveIds (prim metadata, a list op) leaves an instance out as invisibleIds does. The
+    # USD library illum reads with parses list-op metadata it does not know from .usdc only.
+    now = Usd.TimeCode.Default()
+    inst.DeactivateId(12)
+    assert len(inst.ComputeInstanceTransformsAtTime(now, now)) == 3
+    s.Export(str(tmp_path / "inactive.usdc"))
+    inactive = render(illum.load(tmp_path / "inactive.usdc"))
+    assert not np.array_equal(inactive, a)
+    inst.ActivateId(12)
+    inst.GetInvisibleIdsAttr().Set([13, 12])
+    s.Export(str(tmp_path / "invisible.usdc"))
+    assert np.array_equal(inactive, render(illum.load(tmp_path / "invisible.usdc")))
 
 
 def rect_irradiance(radiance, w, h, d):

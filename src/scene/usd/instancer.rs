@@ -17,6 +17,43 @@ struct Part {
 }
 
 impl Reader {
+    /// The instancer's `inactiveIds` (prim metadata, an int64 list op): each layer's opinion
+    /// composed from the strongest down, as pxr composes list-op metadata.
+    fn inactive_ids(&self, prim: &sdf::Path) -> Result<Vec<i64>> {
+        let field = "inactiveIds";
+        let stack = self
+            .stage
+            .prim(prim.clone())
+            .prim_stack()
+            .map_err(|e| self.read_error(prim, field, e))?;
+        let mut composed: Option<sdf::Int64ListOp> = None;
+        for (layer, spec) in stack {
+            let Some(layer) = self.stage.layer(&layer) else {
+                continue;
+            };
+            let value = layer
+                .data()
+                .try_field(&spec, field)
+                .map_err(|e| self.read_error(prim, field, e))?;
+            let Some(value) = value else {
+                continue;
+            };
+            let Value::Int64ListOp(op) = value.as_ref() else {
+                return Err(self.invalid(
+                    prim,
+                    field,
+                    value::show(value.as_ref()),
+                    "expected an int64 list op",
+                ));
+            };
+            composed = Some(match composed {
+                None => op.clone(),
+                Some(stronger) => stronger.combined_with(op),
+            });
+        }
+        Ok(composed.map(|op| op.flatten()).unwrap_or_default())
+    }
+
     pub(super) fn point_instancer(&mut self, prim: &sdf::Path, world: DMat4) -> Result<()> {
         // The prototypes are read from here, not as prims of their own.
         self.pruned.insert(prim.clone());
@@ -55,11 +92,12 @@ impl Reader {
             s => s,
         };
         let ids = self.ints(prim, "ids")?;
-        let hidden: HashSet<i64> = self
+        let mut hidden: HashSet<i64> = self
             .ints(prim, "invisibleIds")?
             .unwrap_or_default()
             .into_iter()
             .collect();
+        hidden.extend(self.inactive_ids(prim)?);
         let mut parts = Vec::with_capacity(protos.len());
         for proto in &protos {
             let mut found = Vec::new();
