@@ -382,3 +382,38 @@ fn texture_files_are_sniffed_before_they_are_read() {
     load_in(&dir, ok).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A stage's inputs (what `illum view` watches) are every layer it composed — sublayers,
+/// references — besides the root layer and the images it names.
+#[test]
+fn a_stage_s_inputs_are_its_layers() {
+    let dir = temp_dir("usd-inputs");
+    std::fs::write(
+        dir.join("root.usda"),
+        "#usda 1.0\n(\n    subLayers = [@lights.usda@]\n)\n\
+         def Camera \"Cam\" {}\n\
+         def Xform \"World\" (\n    prepend references = @ball.usda@\n) {}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("lights.usda"),
+        "#usda 1.0\ndef DomeLight \"Sky\" {}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("ball.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"Ball\"\n)\ndef Sphere \"Ball\" {}\n",
+    )
+    .unwrap();
+    let scene = load(&dir.join("root.usda")).unwrap();
+    let names: Vec<String> = scene
+        .inputs
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names[0], "root.usda", "{names:?}");
+    for layer in ["lights.usda", "ball.usda"] {
+        assert_eq!(names.iter().filter(|n| *n == layer).count(), 1, "{names:?}");
+    }
+    assert_eq!(names.len(), 3, "{names:?}");
+}

@@ -605,13 +605,19 @@ impl Builder<'_> {
 pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     let origin = path.display().to_string();
     if super::usd::is_usd(path) {
-        let (file, warnings) = super::usd::load(path)?;
+        let (file, warnings, layers) = super::usd::load(path)?;
         // Asset paths come resolved (absolute); anything relative is the stage's folder's.
         let base = path.parent().unwrap_or(Path::new(""));
         let mut scene = build(&file, &origin, base)?;
         scene.source = Some(path.to_path_buf());
         scene.warnings = warnings;
         scene.inputs = inputs(&file, base, path);
+        for layer in layers {
+            let same = |p: &PathBuf| p == &layer || same_file(p, &layer);
+            if !scene.inputs.iter().any(same) {
+                scene.inputs.push(layer);
+            }
+        }
         return Ok(scene);
     }
     let io = |e: std::io::Error| SceneError::Io {
@@ -634,6 +640,15 @@ pub(crate) fn load_file(path: &Path) -> Result<Scene> {
     scene.source = Some(path.to_path_buf());
     scene.inputs = inputs(&file, base, path);
     Ok(scene)
+}
+
+/// Whether two paths name one file (a layer's resolved path and the path the stage was
+/// opened by).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
 }
 
 /// The first 16 bytes of a file (fewer if it is shorter).

@@ -21,7 +21,7 @@ use glam::DMat4;
 use openusd::sdf::{self, Value};
 use openusd::usd;
 use std::collections::{HashMap, HashSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -106,7 +106,9 @@ impl TexCoords {
 }
 
 /// Reads the stage at `path` into scene-file structures, with the warnings it gives.
-pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
+/// A stage read as a scene file: the file, its warnings, and the layer files it composed
+/// (sublayers, references, payloads; the root layer first), which a watcher follows.
+pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>, Vec<PathBuf>)> {
     let file = path.display().to_string();
     // openusd's own message for a missing file names no cause; say it as every loader does.
     std::fs::metadata(path).map_err(|e| SceneError::Io {
@@ -190,7 +192,16 @@ pub(crate) fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
         ));
     }
     r.out.camera = r.camera()?;
-    Ok((r.out, r.warnings))
+    // Every layer the traversal reached is loaded by now; packaged and anonymous layers are no
+    // files of their own.
+    let layers = r
+        .stage
+        .layer_identifiers()
+        .into_iter()
+        .map(PathBuf::from)
+        .filter(|p| p.is_file())
+        .collect();
+    Ok((r.out, r.warnings, layers))
 }
 
 impl Reader {
