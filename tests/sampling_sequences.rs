@@ -1,7 +1,8 @@
 //! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`, through
 //! tests/kernels/rng_check.comp): shuffled, Owen-scrambled Sobol pairs. Their structure is checked
 //! exactly (the first 2^17 even, or odd, samples of a pixel put one point of every pair in each
-//! elementary interval of area 2^-17), and their randomization by chi-square tests over many
+//! elementary interval of area 2^-17, and every prefix floor(n/2^m) or one more point in each of
+//! area 2^-m), and their randomization by chi-square tests over many
 //! pixels: each point uniform, and pairs of one sample, and the even and the odd sequence,
 //! independent of each other.
 
@@ -63,6 +64,29 @@ fn camera_streams_are_scrambled_sobol_nets() {
                             "seed {seed} pixel {pixel} pair {pair} parity {parity}: two points in \
                              one {cols} x {rows} interval"
                         );
+                    }
+                }
+                // Every prefix is stratified too, not only powers of two: the first n
+                // points put floor(n / 2^m) or one more into each interval of area 2^-m, for
+                // every m and shape (whole aligned blocks are nets; the rest of a block puts
+                // at most one point in each).
+                for n in [44usize, 1000, 3 * 4096 + 77, (1 << M) - 1] {
+                    for m in 0..=M {
+                        let q = (n >> m) as u32;
+                        for a in 0..=m {
+                            let (cols, rows) = (1u32 << a, 1u32 << (m - a));
+                            let mut count = vec![0u32; 1 << m];
+                            for o in &out[..n] {
+                                let cell = ((o[1] * rows as f32) as u32) * cols
+                                    + (o[0] * cols as f32) as u32;
+                                count[cell as usize] += 1;
+                            }
+                            assert!(
+                                count.iter().all(|&c| c == q || c == q + 1),
+                                "seed {seed} pixel {pixel} pair {pair} parity {parity}: the first \
+                                 {n} points are not stratified in {cols} x {rows} intervals"
+                            );
+                        }
                     }
                 }
             }
