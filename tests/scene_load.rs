@@ -417,3 +417,63 @@ fn a_stage_s_inputs_are_its_layers() {
     }
     assert_eq!(names.len(), 3, "{names:?}");
 }
+
+/// A metallic-roughness material's maps: one texture's G and B are used as they are; other
+/// channels are packed into a texture of their own (G roughness, B metallic, 1 where no map
+/// says); maps of two sizes are refused naming the field.
+#[test]
+fn metallic_roughness_maps_are_packed_or_refused() {
+    let dir = temp_dir("mr-maps");
+    write_test_images(&dir);
+    exr::prelude::write_rgba_file(dir.join("one.exr"), 1, 1, |_, _| (0.5, 0.5, 0.5, 1.0)).unwrap();
+    let scene = |materials: &str| {
+        std::fs::write(
+            dir.join("mr.json"),
+            format!(
+                r#"{{ {CAMERA}, "textures": {{ "sky": {{ "file": "sky.exr" }}, "one": {{ "file": "one.exr" }} }},
+                "materials": {{ {materials} }},
+                "shapes": {{ "ball": {{ "sphere": {{ "center": [0, 1, 0], "radius": 1 }}, "material": "m" }} }} }}"#
+            ),
+        )
+        .unwrap();
+        load(&dir.join("mr.json"))
+    };
+    let glb = scene(
+        r#""m": { "metallic_roughness": { "roughness_texture": { "texture": "sky" }, "metallic_texture": { "texture": "sky" } } }"#,
+    )
+    .unwrap();
+    assert_eq!(
+        glb.textures.len(),
+        2,
+        "G and B of one texture are used as they are"
+    );
+    assert_eq!(glb.materials[0].metallic_roughness_texture, Some(0));
+    let packed = scene(
+        r#""m": { "metallic_roughness": { "metallic_texture": { "texture": "sky", "channel": "r" } } }"#,
+    )
+    .unwrap();
+    assert_eq!(packed.textures.len(), 3);
+    assert_eq!(packed.materials[0].metallic_roughness_texture, Some(2));
+    let (src, p) = (&packed.textures[0], &packed.textures[2]);
+    assert_eq!(
+        (p.width, p.height, p.wrap, p.filter),
+        (src.width, src.height, src.wrap, src.filter)
+    );
+    for (t, s) in p.texels.iter().zip(&src.texels) {
+        assert_eq!(
+            (t.y, t.z),
+            (1.0, s.x),
+            "roughness 1, metallic the R channel"
+        );
+    }
+    let err = scene(
+        r#""m": { "metallic_roughness": { "roughness_texture": { "texture": "sky" }, "metallic_texture": { "texture": "one", "channel": "r" } } }"#,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("materials.m.metallic_roughness.metallic_texture.texture")
+            && err.contains("must have one size"),
+        "{err}"
+    );
+}

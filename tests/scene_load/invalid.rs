@@ -299,6 +299,38 @@ fn bad_values_give_specific_errors() {
             ],
         ),
         (
+            with_material(
+                r#"{ "metallic_roughness": {}, "specular": [{ "model": "ggx", "roughness": 0.5 }] }"#,
+            ),
+            &[
+                "bad.json: materials.m.specular: a metallic_roughness material derives its one lobe: leave specular out, got 1 lobes",
+            ],
+        ),
+        (
+            with_material(r#"{ "metallic_roughness": { "metallic": 1.5 } }"#),
+            &["bad.json: materials.m.metallic_roughness.metallic: must be in [0, 1], got 1.5"],
+        ),
+        (
+            with_material(r#"{ "metallic_roughness": { "ior": 0.5 } }"#),
+            &[
+                "bad.json: materials.m.metallic_roughness.ior: must be a finite number >= 1, got 0.5",
+            ],
+        ),
+        (
+            with_material(
+                r#"{ "metallic_roughness": { "roughness_texture": { "texture": "rough" } } }"#,
+            ),
+            &[
+                "bad.json: materials.m.metallic_roughness.roughness_texture.texture: no such texture",
+            ],
+        ),
+        (
+            with_material(
+                r#"{ "metallic_roughness": { "metallic_texture": { "texture": "t", "channel": "x" } } }"#,
+            ),
+            &["materials.m.metallic_roughness.metallic_texture.channel: unknown variant \"x\""],
+        ),
+        (
             with_material(r#"{ "specular": [{ "model": "phong", "roughness": 0.5 }] }"#),
             &[
                 "materials.m.specular[0].model: unknown variant \"phong\", expected one of \"dbrdf\", \"beckmann\", \"ggx\"",
