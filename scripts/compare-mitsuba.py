@@ -67,8 +67,8 @@ def pair_relmse(renders, ref, seconds):
 
 
 class Mitsuba:
-    def __init__(self, path, sampler="independent"):
-        d = tm.convert(path)
+    def __init__(self, path, sampler="independent", light_samples=1, bsdf_samples=1):
+        d = tm.convert(path, light_samples=light_samples, bsdf_samples=bsdf_samples)
         d["sensor"]["sampler"]["type"] = sampler
         self.scene = tm.load(d)
         w, h = self.scene.sensors()[0].film().size()
@@ -137,6 +137,11 @@ def main():
     ap.add_argument("--mi-sampler", default="independent",
                     help="Mitsuba's sampler: independent (its default), ldsampler (scrambled "
                          "(0,2)-sequence, power-of-two counts), multijitter, ...")
+    ap.add_argument("--mi-settings", metavar="SAMPLER:L/B,...",
+                    help="several Mitsuba settings (sampler, emitter and BSDF samples of its "
+                         "direct integrator), e.g. independent:1/1,ldsampler:4/2; each is "
+                         "rendered, and illum is compared with the best (lowest median relMSE). "
+                         "Overrides --mi-sampler")
     a = ap.parse_args()
     mi.set_variant(a.variant)
     sets = [s.split("=", 1) for s in (a.set or ["default="])]
@@ -144,23 +149,32 @@ def main():
     print("Mitsuba %s (%s, %s sampler), drjit %s, %d threads; T = %g s, reference %g s, %d rounds"
           % (mi.__version__, a.variant, a.mi_sampler, dr.__version__, dr.thread_count(), a.time,
              a.ref_time, a.rounds))
+    settings = []
+    for item in (a.mi_settings.split(",") if a.mi_settings else [a.mi_sampler + ":1/1"]):
+        sampler, counts = item.split(":")
+        light, bsdf = (int(x) for x in counts.split("/"))
+        settings.append(("mitsuba %s %d/%d" % (sampler, light, bsdf), sampler, light, bsdf))
+    summary = []
     for scene in a.scenes:
         name = os.path.splitext(os.path.basename(scene))[0]
-        m = Mitsuba(scene, a.mi_sampler)
+        ms = {label: Mitsuba(scene, sampler, light, bsdf)
+              for label, sampler, light, bsdf in settings}
+        m = ms[settings[0][0]]
         ref_path = os.path.join(a.out, name + "-ref.exr")
         if not os.path.exists(ref_path):
             spp, wall = m.timed(a.ref_time, 999, ref_path)
             print("%s: reference %d spp in %.1f s" % (name, spp, wall))
         ref = rgb(ref_path)
-        rows = {"mitsuba": []}
+        rows = {label: [] for label in ms}
         for _ in sets:
             rows.setdefault(_[0], [])
         for r in range(a.rounds):
-            out = os.path.join(a.out, "%s-mitsuba-%d.exr" % (name, r))
-            spp, wall = m.timed(a.time, r + 1, out)
-            img = rgb(out)
-            e = relmse(img, ref) * wall / a.time
-            rows["mitsuba"].append((e, spp * m.pixels / wall / 1e6, spp, wall,
+            for label, mm in ms.items():
+                out = os.path.join(a.out, "%s-%s-%d.exr" % (name, re.sub(r"\W", "_", label), r))
+                spp, wall = mm.timed(a.time, r + 1, out)
+                img = rgb(out)
+                e = relmse(img, ref) * wall / a.time
+                rows[label].append((e, spp * mm.pixels / wall / 1e6, spp, wall,
                                     img.mean() / ref.mean(), img))
             for label, opts in sets:
                 out = os.path.join(a.out, "%s-%s-%d.exr" % (name, re.sub(r"\W", "_", label), r))
@@ -168,9 +182,11 @@ def main():
                 img = rgb(out)
                 e = relmse(img, ref) * secs / a.time
                 rows[label].append((e, rate, spp, secs, img.mean() / ref.mean(), img))
-        mine = statistics.median(x[0] for x in rows["mitsuba"])
+        best = min(ms, key=lambda k: statistics.median(x[0] for x in rows[k]))
+        mine = statistics.median(x[0] for x in rows[best])
         pairs = {k: pair_relmse([(x[5], x[3]) for x in xs], ref, a.time) for k, xs in rows.items()}
-        print("\n%s (Mitsuba warm-up render incl. JIT: %.2f s)" % (scene, m.warmup_s))
+        print("\n%s (Mitsuba warm-up render incl. JIT: %.2f s; best Mitsuba setting: %s)"
+              % (scene, m.warmup_s, best))
         print("| renderer / illum options | relMSE at %g s | x Mitsuba | from pairs | x Mitsuba "
               "| M camera samples/s | spp | mean / ref |" % a.time)
         print("|---|---|---|---|---|---|---|---|")
@@ -180,9 +196,18 @@ def main():
             print("| %s%s | %.3g (%s) | %.2f | %.3g | %.2f | %.2f | %d | %.4f |"
                   % (label, " `%s`" % opts if opts else "", e,
                      ", ".join("%.3g" % x[0] for x in xs), e / mine, pairs[label],
-                     pairs[label] / pairs["mitsuba"],
+                     pairs[label] / pairs[best],
                      statistics.median(x[1] for x in xs), statistics.median(x[2] for x in xs),
                      statistics.mean(x[4] for x in xs)), flush=True)
+        for label, _ in sets:
+            summary.append((name, label, statistics.median(x[0] for x in rows[label]) / mine,
+                            best))
+    if len(a.scenes) > 1:
+        print("\n| scene | illum options | relMSE at %g s ÷ best Mitsuba | best Mitsuba setting |"
+              % a.time)
+        print("|---|---|---|---|")
+        for name, label, ratio, best in summary:
+            print("| %s | %s | %.2f | %s |" % (name, label, ratio, best))
 
 
 if __name__ == "__main__":
