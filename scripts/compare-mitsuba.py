@@ -11,7 +11,8 @@ For each scene (an illum scene that scripts/to-mitsuba.py converts, e.g. scenes/
 Equal time: illum's render time is what it prints as "render X s" (its kernel compilation is
 excluded). Mitsuba renders a sample count calibrated from its previous render of that scene to
 take T seconds; its first (warm-up) render, which includes its JIT compilation, is timed apart and
-not counted. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
+not counted. Samplers other than `independent` compile Mitsuba's kernels again for every sample
+count, so each timed render of theirs follows an untimed one of the same count. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
 unbiased estimator falls as 1/time). The table gives medians over rounds, and the variance part
 of relMSE from pairs of rounds (pair_relmse: free of the reference's own noise, which matters where
 the renders come near the reference, as on a GPU).
@@ -70,6 +71,7 @@ class Mitsuba:
     def __init__(self, path, sampler="independent", light_samples=1, bsdf_samples=1):
         d = tm.convert(path, light_samples=light_samples, bsdf_samples=bsdf_samples)
         d["sensor"]["sampler"]["type"] = sampler
+        self.sampler = sampler
         self.scene = tm.load(d)
         w, h = self.scene.sensors()[0].film().size()
         self.pixels = int(w) * int(h)
@@ -77,7 +79,7 @@ class Mitsuba:
         self.render(1, 0)
         self.warmup_s = time.time() - t  # includes the JIT compilation
         self.rate = 1e6  # camera samples/s, refined by each timed render
-        for seconds in (0.3, 1.0, 2.0):  # the first renders carry fixed costs: calibrate thrice
+        for seconds in (0.3, 1.0):  # the first renders carry fixed costs: calibrate twice
             self.timed(seconds, 0, None)
 
     def render(self, spp, seed):
@@ -100,9 +102,32 @@ class Mitsuba:
             return chunks[0][1], done
         return sum(n * np.array(img, dtype=np.float64) for n, img in chunks) / done, done
 
-    def timed(self, seconds, seed, out):
+    def reference(self, seconds, out):
+        """Renders of the `independent` setting, with seeds of their own, averaged by their
+        counts until `seconds` have passed (one render sized from the calibration can end far
+        short of it): (samples, seconds)."""
         t = time.time()
-        img, spp = self.render(max(1, round(seconds * self.rate / self.pixels)), seed)
+        total, acc, seed = 0, None, 999
+        while time.time() - t < seconds:
+            left = seconds - (time.time() - t)
+            c = time.time()
+            img, spp = self.render(max(1, round(min(left, 10.0) * self.rate / self.pixels)), seed)
+            self.rate = spp * self.pixels / (time.time() - c)
+            img = np.asarray(img, dtype=np.float64)
+            acc = img * spp if acc is None else acc + img * spp
+            total += spp
+            seed += 1
+        mi.Bitmap(np.asarray(acc / total, dtype=np.float32)).write(out)
+        return total, time.time() - t
+
+    def timed(self, seconds, seed, out):
+        spp = max(1, round(seconds * self.rate / self.pixels))
+        if self.sampler != "independent":
+            # Its kernels take the sample count as a constant: a new count compiles them again
+            # (0.5-0.8 s on 2 cores), which a render of that count once, untimed, leaves out.
+            self.render(spp, seed + 7919)
+        t = time.time()
+        img, spp = self.render(spp, seed)
         wall = time.time() - t
         self.rate = spp * self.pixels / wall
         if out:
@@ -162,7 +187,9 @@ def main():
         m = ms[settings[0][0]]
         ref_path = os.path.join(a.out, name + "-ref.exr")
         if not os.path.exists(ref_path):
-            spp, wall = m.timed(a.ref_time, 999, ref_path)
+            if m.sampler != "independent":
+                raise SystemExit("the first Mitsuba setting renders the reference: independent")
+            spp, wall = m.reference(a.ref_time, ref_path)
             print("%s: reference %d spp in %.1f s" % (name, spp, wall))
         ref = rgb(ref_path)
         rows = {label: [] for label in ms}
@@ -199,15 +226,17 @@ def main():
                      pairs[label] / pairs[best],
                      statistics.median(x[1] for x in xs), statistics.median(x[2] for x in xs),
                      statistics.mean(x[4] for x in xs)), flush=True)
+        # From pairs (rounds >= 2): the variance alone, free of the reference's noise.
+        best_pairs = min(ms, key=lambda k: pairs[k])
         for label, _ in sets:
             summary.append((name, label, statistics.median(x[0] for x in rows[label]) / mine,
-                            best))
+                            best, pairs[label] / pairs[best_pairs], best_pairs))
     if len(a.scenes) > 1:
-        print("\n| scene | illum options | relMSE at %g s ÷ best Mitsuba | best Mitsuba setting |"
-              % a.time)
-        print("|---|---|---|---|")
-        for name, label, ratio, best in summary:
-            print("| %s | %s | %.2f | %s |" % (name, label, ratio, best))
+        print("\n| scene | illum options | relMSE at %g s ÷ best Mitsuba | best Mitsuba setting "
+              "| from pairs ÷ best Mitsuba | best Mitsuba setting (pairs) |" % a.time)
+        print("|---|---|---|---|---|---|")
+        for name, label, ratio, best, pratio, pbest in summary:
+            print("| %s | %s | %.2f | %s | %.2f | %s |" % (name, label, ratio, best, pratio, pbest))
 
 
 if __name__ == "__main__":
