@@ -11,8 +11,8 @@ For each scene (an illum scene that scripts/to-mitsuba.py converts, e.g. scenes/
 Equal time: illum's render time is what it prints as "render X s" (its kernel compilation is
 excluded). Mitsuba renders a sample count calibrated from its previous render of that scene to
 take T seconds; its first (warm-up) render, which includes its JIT compilation, is timed apart and
-not counted. Samplers other than `independent` compile Mitsuba's kernels again for every sample
-count, so each timed render of theirs follows an untimed one of the same count. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
+not counted. Some samplers (multijitter, ldsampler) compile Mitsuba's kernels again for every
+sample count, so each timed render follows an untimed one of the same count. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
 unbiased estimator falls as 1/time). The table gives medians over rounds, and the variance part
 of relMSE from pairs of rounds (pair_relmse: free of the reference's own noise, which matters where
 the renders come near the reference, as on a GPU).
@@ -122,10 +122,10 @@ class Mitsuba:
 
     def timed(self, seconds, seed, out):
         spp = max(1, round(seconds * self.rate / self.pixels))
-        if self.sampler != "independent":
-            # Its kernels take the sample count as a constant: a new count compiles them again
-            # (0.5-0.8 s on 2 cores), which a render of that count once, untimed, leaves out.
-            self.render(spp, seed + 7919)
+        # Kernels may take the sample count as a constant (multijitter's and ldsampler's do): a
+        # new count compiles them again (0.5-0.8 s on 2 cores), which a render of that count
+        # once, untimed, leaves out.
+        self.render(spp, seed + 7919)
         t = time.time()
         img, spp = self.render(spp, seed)
         wall = time.time() - t
