@@ -490,6 +490,62 @@ def test_the_lookdev_stage_loads_without_warnings():
     assert r.beauty.mean() > 0.05
 
 
+def write_exr(path, px):
+    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                      {"RGB": np.asarray(px, dtype=np.float32)}) as f:
+        f.write(str(path))
+
+
+QUAD = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+QUAD_ST = [(0, 0), (1, 0), (1, 1), (0, 1)]
+QUAD_UV = [[u, 1 - v] for u, v in QUAD_ST]  # illum's uvs of QUAD_ST (origin top left)
+
+
+def textured_card(s, primvar="st"):
+    """/World/Card: the 2 × 2 quad facing +Z with face-varying texture coordinates QUAD_ST in
+    `primvar`, bound to /Looks/Card (a UsdPreviewSurface) with a UsdPrimvarReader_float2 of that
+    primvar: (the surface shader, the reader)."""
+    m = mesh(s, "/World/Card", QUAD, [4], [0, 1, 2, 3])
+    UsdGeom.PrimvarsAPI(m).CreatePrimvar(primvar, Sdf.ValueTypeNames.TexCoord2fArray,
+                                         UsdGeom.Tokens.faceVarying).Set(QUAD_ST)
+    mat = UsdShade.Material.Define(s, "/Looks/Card")
+    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
+    ps.CreateIdAttr("UsdPreviewSurface")
+    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set(primvar)
+    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
+    bind(m, mat)
+    return ps, reader
+
+
+def uv_texture(s, name, file, st, surface=None, input=None, output="rgb"):
+    """/Looks/Card/<name>: a UsdUVTexture of `file` reading its coordinates from the node `st`
+    (its `result`), connected through `output` to `surface`'s `input` when given."""
+    tex = UsdShade.Shader.Define(s, f"/Looks/Card/{name}")
+    tex.CreateIdAttr("UsdUVTexture")
+    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(file)
+    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(st.ConnectableAPI(), "result")
+    if surface is not None:
+        kind = Sdf.ValueTypeNames.Color3f if output == "rgb" else Sdf.ValueTypeNames.Float
+        surface.CreateInput(input, kind).ConnectToSource(tex.ConnectableAPI(), output)
+    return tex
+
+
+def card_twin(material, uvs, textures, lights=None):
+    """The JSON twin of a textured_card stage seen from (0, 0, 4) at 32 × 32 under a white dome:
+    the quad with illum's uvs `uvs` (one per QUAD corner)."""
+    return {
+        "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
+        "textures": textures,
+        "materials": {"card": material},
+        "shapes": {"card": {"mesh": {"positions": [list(p) for p in QUAD],
+                                     "indices": [0, 1, 2, 0, 2, 3], "uvs": uvs},
+                            "material": "card"}},
+        "lights": {"sky": {"dome": {"rotation": 180}}, **(lights or {})},
+    }
+
+
 @pytest.mark.parametrize("uv", ["st", "UVMap"])
 def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path, uv):
     """USD's st has (0, 0) at the image's bottom left: a quad whose st spans [0, 1]² shows the
@@ -498,45 +554,18 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path, uv):
     px = np.zeros((8, 8, 3), dtype=np.float32)
     px[:4] = (0.9, 0.05, 0.05)  # top half red
     px[4:] = (0.05, 0.9, 0.05)  # bottom half green
-    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
-                      {"RGB": px}) as f:
-        f.write(str(tmp_path / "halves.exr"))
+    write_exr(tmp_path / "halves.exr", px)
     s = new_stage(tmp_path / "tex.usda")
     camera(s, (0, 0, 4), size=(32, 32))
-    quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
-    m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
-    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar(uv, Sdf.ValueTypeNames.TexCoord2fArray,
-                                              UsdGeom.Tokens.faceVarying)
-    st.Set([(0, 0), (1, 0), (1, 1), (0, 1)])
-    mat = UsdShade.Material.Define(s, "/Looks/Card")
-    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
-    ps.CreateIdAttr("UsdPreviewSurface")
-    tex = UsdShade.Shader.Define(s, "/Looks/Card/Image")
-    tex.CreateIdAttr("UsdUVTexture")
-    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("halves.exr")
+    ps, reader = textured_card(s, uv)
+    tex = uv_texture(s, "Image", "halves.exr", reader, ps, "diffuseColor")
     tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set("clamp")
     tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set("clamp")
-    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
-    reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set(uv)
-    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
-        reader.ConnectableAPI(), "result")
-    ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
-        tex.ConnectableAPI(), "rgb")
-    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
-    bind(m, mat)
     UsdLux.DomeLight.Define(s, "/Sky")
     s.Save()
-    d = {
-        "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
-        "textures": {"halves": {"file": "halves.exr", "wrap": "clamp"}},
-        "materials": {"card": {**ggx((1, 1, 1), 0.5), "diffuse_texture": "halves"}},
-        "shapes": {"card": {"mesh": {"positions": [list(p) for p in quad],
-                                     "indices": [0, 1, 2, 0, 2, 3],
-                                     "uvs": [[0, 1], [1, 1], [1, 0], [0, 0]]},
-                            "material": "card"}},
-        "lights": {"sky": {"dome": {"rotation": 180}}},
-    }
+    d = card_twin({**ggx((1, 1, 1), 0.5), "diffuse_texture": "halves"},
+                  QUAD_UV,
+                  {"halves": {"file": "halves.exr", "wrap": "clamp"}})
     a = render(illum.load(tmp_path / "tex.usda"))
     b = render(twin(d, tmp_path))
     assert np.array_equal(a, b)
@@ -550,12 +579,6 @@ def test_a_textured_preview_surface_maps_st_as_usd_does(tmp_path, uv):
     assert np.array_equal(render(illum.load(tmp_path / "pkg" / "tex.usdz")), a)
 
 
-def write_exr(path, px):
-    with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
-                      {"RGB": np.asarray(px, dtype=np.float32)}) as f:
-        f.write(str(path))
-
-
 def test_textured_metallic_and_roughness_read_as_the_metallic_roughness_model(tmp_path):
     """roughness and metallic connected to channels of two UsdUVTextures (G of one, R of the
     other, with a scale) over a textured diffuseColor: the JSON twin's metallic_roughness
@@ -567,32 +590,11 @@ def test_textured_metallic_and_roughness_read_as_the_metallic_roughness_model(tm
     write_exr(tmp_path / "metal.exr", [[(0, 1, 1), (1, 0, 0)], [(1, 1, 0), (0, 0, 1)]])
     s = new_stage(tmp_path / "mr.usda")
     camera(s, (0, 0, 4), size=(32, 32))
-    quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
-    m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
-    st = UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
-                                              UsdGeom.Tokens.faceVarying)
-    st.Set([(0, 0), (1, 0), (1, 1), (0, 1)])
-    mat = UsdShade.Material.Define(s, "/Looks/Card")
-    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
-    ps.CreateIdAttr("UsdPreviewSurface")
-    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
-    reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
-    for name, file, input, output, scale in [
-            ("Albedo", "albedo.exr", "diffuseColor", "rgb", None),
-            ("Metal", "metal.exr", "metallic", "r", 0.8),
-            ("Masks", "masks.exr", "roughness", "g", None)]:
-        tex = UsdShade.Shader.Define(s, f"/Looks/Card/{name}")
-        tex.CreateIdAttr("UsdUVTexture")
-        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(file)
-        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(
-            reader.ConnectableAPI(), "result")
-        if scale is not None:
-            tex.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((scale,) * 4)
-        kind = Sdf.ValueTypeNames.Color3f if output == "rgb" else Sdf.ValueTypeNames.Float
-        ps.CreateInput(input, kind).ConnectToSource(tex.ConnectableAPI(), output)
-    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
-    bind(m, mat)
+    ps, reader = textured_card(s)
+    uv_texture(s, "Albedo", "albedo.exr", reader, ps, "diffuseColor")
+    metal = uv_texture(s, "Metal", "metal.exr", reader, ps, "metallic", "r")
+    metal.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set((0.8,) * 4)
+    uv_texture(s, "Masks", "masks.exr", reader, ps, "roughness", "g")
     UsdLux.DomeLight.Define(s, "/Sky")
     key = UsdLux.SphereLight.Define(s, "/Key")
     key.CreateRadiusAttr(0.2)
@@ -601,25 +603,18 @@ def test_textured_metallic_and_roughness_read_as_the_metallic_roughness_model(tm
     s.Save()
 
     def twin_with(metal_channel):
-        return twin({
-            "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
-            "textures": {"albedo": {"file": "albedo.exr"}, "metal": {"file": "metal.exr"},
-                         "masks": {"file": "masks.exr"}},
-            "materials": {"card": {"diffuse": [1, 1, 1], "diffuse_texture": "albedo",
-                                   "metallic_roughness": {
-                                       "metallic": F32(0.8),
-                                       "metallic_texture": {"texture": "metal",
-                                                            "channel": metal_channel},
-                                       "roughness": 1,
-                                       "roughness_texture": {"texture": "masks", "channel": "g"}}}},
-            "shapes": {"card": {"mesh": {"positions": [list(p) for p in quad],
-                                         "indices": [0, 1, 2, 0, 2, 3],
-                                         "uvs": [[0, 1], [1, 1], [1, 0], [0, 0]]},
-                                "material": "card"}},
-            "lights": {"sky": {"dome": {"rotation": 180}},
-                       "key": {"sphere": {"center": [1, 1, 2], "radius": F32(0.2)},
-                               "intensity": 30}},
-        }, tmp_path)
+        return twin(card_twin(
+            {"diffuse": [1, 1, 1], "diffuse_texture": "albedo",
+             "metallic_roughness": {
+                 "metallic": F32(0.8),
+                 "metallic_texture": {"texture": "metal", "channel": metal_channel},
+                 "roughness": 1,
+                 "roughness_texture": {"texture": "masks", "channel": "g"}}},
+            QUAD_UV,
+            {"albedo": {"file": "albedo.exr"}, "metal": {"file": "metal.exr"},
+             "masks": {"file": "masks.exr"}},
+            {"key": {"sphere": {"center": [1, 1, 2], "radius": F32(0.2)}, "intensity": 30}}),
+            tmp_path)
 
     stage = illum.load(tmp_path / "mr.usda")
     assert stage.warnings == []
@@ -664,19 +659,9 @@ def test_a_transform2d_moves_texture_coordinates_as_the_preview_surface_spec_say
     write_exr(tmp_path / "albedo.exr", [[(0.9, 0.2, 0.1), (0.2, 0.8, 0.3), (0.1, 0.1, 0.9)],
                                         [(0.3, 0.3, 0.9), (0.8, 0.8, 0.8), (0.9, 0.9, 0.1)]])
     rotation, scale, translation = 30.0, (2.0, 1.5), (0.25, -0.5)
-    st = [(0, 0), (1, 0), (1, 1), (0, 1)]
     s = new_stage(tmp_path / "xf2d.usda")
     camera(s, (0, 0, 4), size=(32, 32))
-    quad = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
-    m = mesh(s, "/World/Card", quad, [4], [0, 1, 2, 3])
-    UsdGeom.PrimvarsAPI(m).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
-                                         UsdGeom.Tokens.faceVarying).Set(st)
-    mat = UsdShade.Material.Define(s, "/Looks/Card")
-    ps = UsdShade.Shader.Define(s, "/Looks/Card/Surface")
-    ps.CreateIdAttr("UsdPreviewSurface")
-    reader = UsdShade.Shader.Define(s, "/Looks/Card/St")
-    reader.CreateIdAttr("UsdPrimvarReader_float2")
-    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("st")
+    ps, reader = textured_card(s)
     xf = UsdShade.Shader.Define(s, "/Looks/Card/Place")
     xf.CreateIdAttr("UsdTransform2d")
     xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(),
@@ -684,14 +669,7 @@ def test_a_transform2d_moves_texture_coordinates_as_the_preview_surface_spec_say
     xf.CreateInput("rotation", Sdf.ValueTypeNames.Float).Set(rotation)
     xf.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set(scale)
     xf.CreateInput("translation", Sdf.ValueTypeNames.Float2).Set(translation)
-    tex = UsdShade.Shader.Define(s, "/Looks/Card/Image")
-    tex.CreateIdAttr("UsdUVTexture")
-    tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("albedo.exr")
-    tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(xf.ConnectableAPI(), "result")
-    ps.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
-        tex.ConnectableAPI(), "rgb")
-    mat.CreateSurfaceOutput().ConnectToSource(ps.ConnectableAPI(), "surface")
-    bind(m, mat)
+    uv_texture(s, "Image", "albedo.exr", xf, ps, "diffuseColor")
     UsdLux.DomeLight.Define(s, "/Sky")
     s.Save()
 
@@ -702,24 +680,15 @@ def test_a_transform2d_moves_texture_coordinates_as_the_preview_surface_spec_say
         v = math.sin(a) * x + math.cos(a) * y + translation[1]
         return [u, 1 - v]
 
-    # The corners as the mesh's vertices are laid out in the twin: one per face corner.
-    d = {
-        "camera": json_camera((0, 0, 4), (0, 0, 3), size=(32, 32)),
-        "textures": {"albedo": {"file": "albedo.exr"}},
-        "materials": {"card": {**ggx((1, 1, 1), 0.5), "diffuse_texture": "albedo"}},
-        "shapes": {"card": {"mesh": {"positions": [list(p) for p in quad],
-                                     "indices": [0, 1, 2, 0, 2, 3],
-                                     "uvs": [placed(p) for p in st]},
-                            "material": "card"}},
-        "lights": {"sky": {"dome": {"rotation": 180}}},
-    }
+    material = {**ggx((1, 1, 1), 0.5), "diffuse_texture": "albedo"}
+    textures = {"albedo": {"file": "albedo.exr"}}
     stage = illum.load(tmp_path / "xf2d.usda")
     assert stage.warnings == []
     a = render(stage)
-    b = render(twin(d, tmp_path))
+    b = render(twin(card_twin(material, [placed(p) for p in QUAD_ST], textures), tmp_path))
     assert np.abs(a - b).max() <= 1e-5 * np.abs(b).max(), np.abs(a - b).max()
-    d["shapes"]["card"]["mesh"]["uvs"] = [[p[0], 1 - p[1]] for p in st]
-    assert np.abs(a - render(twin(d, tmp_path))).max() > 0.05
+    plain = render(twin(card_twin(material, QUAD_UV, textures), tmp_path))
+    assert np.abs(a - plain).max() > 0.05
 
 
 BOX_POINTS = [(-0.5, 0, -0.5), (0.5, 0, -0.5), (0.5, 0, 0.5), (-0.5, 0, 0.5),

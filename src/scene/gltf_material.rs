@@ -7,8 +7,8 @@
 use super::error::SceneError;
 use super::gltf::{Loader, read_uri};
 use super::texture::{self, ImageKind};
-use super::types::{Distribution, Fresnel, Material, MaterialId, SpecularLobe, TextureId};
-use glam::{Vec2, Vec3, Vec4};
+use super::types::{Material, MaterialId, MetallicRoughness, TextureId};
+use glam::{Vec3, Vec4};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -66,24 +66,19 @@ impl Loader<'_> {
             Some(n) if !n.is_empty() => n.to_owned(),
             _ => f.clone(),
         };
+        let factors = MetallicRoughness {
+            base_color: base,
+            metallic,
+            roughness,
+            dielectric_f0: 0.04,
+        };
         Ok(Material {
             name: format!("{}/{name}", self.req.shape),
-            diffuse: base * (1.0 - metallic),
+            diffuse: factors.diffuse(),
             diffuse_texture,
-            specular: vec![SpecularLobe {
-                distribution: Distribution::GgxSmith,
-                alpha: Vec2::splat((roughness * roughness).max(1e-4)),
-                fresnel: Fresnel::Schlick {
-                    f0: Vec3::splat(0.04).lerp(base, metallic),
-                },
-            }],
+            specular: vec![factors.lobe()],
             metallic_roughness_texture,
-            metallic_roughness: Some(crate::scene::MetallicRoughness {
-                base_color: base,
-                metallic,
-                roughness,
-                dielectric_f0: 0.04,
-            }),
+            metallic_roughness: Some(factors),
             emission,
             emission_texture,
             two_sided: m.double_sided(),

@@ -243,6 +243,25 @@ pub struct MetallicRoughness {
     pub dielectric_f0: f32,
 }
 
+impl MetallicRoughness {
+    /// The Lambert albedo of an untextured texel: base·(1 − metallic).
+    pub fn diffuse(&self) -> Vec3 {
+        self.base_color * (1.0 - self.metallic)
+    }
+
+    /// The GGX-Smith lobe of an untextured texel: alpha max(roughness², 1e-4), Schlick f0
+    /// mix(dielectric_f0, base, metallic), as the shader derives it per texel.
+    pub fn lobe(&self) -> SpecularLobe {
+        SpecularLobe {
+            distribution: Distribution::GgxSmith,
+            alpha: Vec2::splat((self.roughness * self.roughness).max(1e-4)),
+            fresnel: Fresnel::Schlick {
+                f0: Vec3::splat(self.dielectric_f0).lerp(self.base_color, self.metallic),
+            },
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub name: String,

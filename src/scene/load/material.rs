@@ -141,24 +141,19 @@ impl Builder<'_> {
             .map(|t| self.texture_ref(&format!("{f}.diffuse_texture"), t))
             .transpose()?;
         let metallic_roughness_texture = self.packed_texture(name, &fm, mr)?;
+        let factors = MetallicRoughness {
+            base_color: base,
+            metallic,
+            roughness,
+            dielectric_f0,
+        };
         Ok(Material {
             name: name.to_owned(),
-            diffuse: base * (1.0 - metallic),
+            diffuse: factors.diffuse(),
             diffuse_texture,
-            specular: vec![SpecularLobe {
-                distribution: Distribution::GgxSmith,
-                alpha: Vec2::splat((roughness * roughness).max(1e-4)),
-                fresnel: Fresnel::Schlick {
-                    f0: Vec3::splat(dielectric_f0).lerp(base, metallic),
-                },
-            }],
+            specular: vec![factors.lobe()],
             metallic_roughness_texture,
-            metallic_roughness: Some(MetallicRoughness {
-                base_color: base,
-                metallic,
-                roughness,
-                dielectric_f0,
-            }),
+            metallic_roughness: Some(factors),
             emission: ctx.nonneg_rgb(&format!("{f}.emission"), def.emission)?,
             emission_texture: def
                 .emission_texture

@@ -7,8 +7,7 @@
 
 use super::{Reader, Result, value};
 use crate::scene::format::{
-    ChannelDef, ChannelName, FresnelDef, LobeDef, MaterialDef, MetallicRoughnessDef, ModelDef,
-    NumOrArray,
+    ChannelDef, FresnelDef, LobeDef, MaterialDef, MetallicRoughnessDef, ModelDef, NumOrArray,
 };
 use openusd::schemas::shade::MaterialBindingAPI;
 use openusd::sdf::{self, Value};
@@ -279,12 +278,9 @@ impl Reader {
         let attr = format!("inputs:{input}");
         let (value, channel) = match self.source(shader, &attr)? {
             Source::Shader(tex, output) => {
-                let c = match output.as_str() {
-                    "outputs:r" => ChannelName::R,
-                    "outputs:g" => ChannelName::G,
-                    "outputs:b" => ChannelName::B,
-                    "outputs:a" => ChannelName::A,
-                    _ => {
+                let c = match super::texture::output_channel(&output) {
+                    Some(c) => c,
+                    None => {
                         return Err(self.unsupported(
                             shader,
                             &attr,

@@ -3,7 +3,7 @@
 
 use super::shade::Source;
 use super::{Reader, Result, TexCoords, Transform2d, value};
-use crate::scene::format::WrapDef;
+use crate::scene::format::{ChannelName, WrapDef};
 use openusd::sdf::{self, Value};
 
 impl Reader {
@@ -102,13 +102,7 @@ impl Reader {
                 ),
             ));
         }
-        let read: &[usize] = match output {
-            "outputs:r" => &[0],
-            "outputs:g" => &[1],
-            "outputs:b" => &[2],
-            "outputs:a" => &[3],
-            _ => &[0, 1, 2],
-        };
+        let read = output_channel(output).map_or(vec![0, 1, 2], |c| vec![c as usize]);
         let four = |r: &mut Self, attr: &str, fallback: [f64; 4]| -> Result<[f64; 4]> {
             Ok(match r.node_value(tex, attr)? {
                 None => fallback,
@@ -213,5 +207,17 @@ impl Reader {
         let wrap = wraps[0];
         self.add_texture(&name, file, bytes, srgb, wrap);
         Ok((Some(name), scale))
+    }
+}
+
+/// The channel a UsdUVTexture output gives (`outputs:r` … `outputs:a`); None for `outputs:rgb`
+/// and anything else.
+pub(super) fn output_channel(output: &str) -> Option<ChannelName> {
+    match output {
+        "outputs:r" => Some(ChannelName::R),
+        "outputs:g" => Some(ChannelName::G),
+        "outputs:b" => Some(ChannelName::B),
+        "outputs:a" => Some(ChannelName::A),
+        _ => None,
     }
 }
