@@ -626,7 +626,7 @@ def test_textured_metallic_and_roughness_read_as_the_metallic_roughness_model(tm
 @pytest.mark.parametrize("mirrored", [False, True])
 def test_a_rect_light_s_texture_lies_as_usdlux_lays_it(tmp_path, mirrored):
     """UsdLux puts a RectLight texture's first texel at local (+X, +Y) and its last at (-X, -Y)
-    (as pxr's hdEmbree samples it): seen from the side it lights, the image reads upright; a
+    (the schema's own words): seen from the side it lights, the image reads upright; a
     transform that mirrors the light mirrors the image."""
     quadrants = {(0, 0): (1, 0, 0), (0, 1): (0, 1, 0), (1, 0): (0, 0, 1), (1, 1): (1, 1, 1)}
     px = np.zeros((64, 64, 3), dtype=np.float32)
