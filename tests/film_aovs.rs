@@ -226,13 +226,21 @@ fn films_with_bad_aov_names_are_not_written() {
 }
 
 /// The device side: download_window interleaves each pixel's FilmPixel with its AOV vec4s
-/// ([pixel][plane] on the device) for a window of the frame, and clear zeroes both buffers.
+/// ([pixel][plane] on the device) for a window inside the device film's own window (which need
+/// not start at the image's corner), and clear zeroes both buffers.
 #[test]
 fn device_aov_planes_are_read_back_and_cleared_with_the_film() {
     use ash::vk::BufferUsageFlags as U;
     let ctx = context();
     let (w, h, p) = (5u32, 4u32, 3usize);
     let pixels = (w * h) as usize;
+    // The film covers pixels (2, 7) to (6, 10) of a larger image.
+    let covered = Window {
+        x0: 2,
+        y0: 7,
+        x1: 2 + w,
+        y1: 7 + h,
+    };
     let film_data: Vec<f32> = (0..pixels * FILM_CHANNELS).map(|i| i as f32).collect();
     let aov_data: Vec<f32> = (0..pixels * p * AOV_CHANNELS)
         .map(|i| -(i as f32) - 0.5)
@@ -244,20 +252,21 @@ fn device_aov_planes_are_read_back_and_cleared_with_the_film() {
         film: &film_buf,
         aovs: Some(&aov_buf),
         aov_planes: p,
+        window: covered,
     };
     let window = Window {
-        x0: 1,
-        y0: 1,
-        x1: 4,
-        y1: 3,
+        x0: 3,
+        y0: 8,
+        x1: 6,
+        y1: 10,
     };
-    let got = film::download_window(&ctx, device, w, window).unwrap();
+    let got = film::download_window(&ctx, device, window).unwrap();
     let c = film::channels(p);
     assert_eq!(got.len(), window.pixels() * c);
     let mut i = 0;
     for y in window.y0..window.y1 {
         for x in window.x0..window.x1 {
-            let px = (y * w + x) as usize;
+            let px = ((y - covered.y0) * w + x - covered.x0) as usize;
             let want: Vec<f32> = film_data[px * FILM_CHANNELS..(px + 1) * FILM_CHANNELS]
                 .iter()
                 .chain(&aov_data[px * p * AOV_CHANNELS..(px + 1) * p * AOV_CHANNELS])
@@ -268,7 +277,7 @@ fn device_aov_planes_are_read_back_and_cleared_with_the_film() {
         }
     }
     film::clear(&ctx, device).unwrap();
-    let cleared = film::download_window(&ctx, device, w, Window::full(w, h)).unwrap();
+    let cleared = film::download_window(&ctx, device, covered).unwrap();
     assert!(cleared.iter().all(|&x| x == 0.0));
     assert_no_validation_messages(&ctx);
 }

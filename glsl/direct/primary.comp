@@ -18,7 +18,8 @@ void main() {
     if (!film_pixel(pc, pix, pixel)) return;
     // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
     // fixed point (src/film/mod.rs), since long float32 running sums round systematically.
-    FilmPixel acc = film[pixel];
+    uint slot = film_slot(pix);
+    FilmPixel acc = film[slot];
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint samples = film_sample_count(pc, pixel);
     for (uint k = 0u; k < samples; ++k) {
@@ -39,5 +40,5 @@ void main() {
         film_add(acc, sample_index, beauty, le);
     }
     acc.beauty_sq.w += float(rays);
-    film[pixel] = acc;
+    film[slot] = acc;
 }

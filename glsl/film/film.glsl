@@ -34,6 +34,12 @@ bool film_pixel(PassConstants p, out uvec2 pix, out uint pixel) {
     return true;
 }
 
+// Where pixel pix's sums lie in the device film (and its AOV planes): the film covers the window
+// Frame.film_x0, film_y0, film_width (the job's pixels, with adaptive sampling its pilot's).
+uint film_slot(uvec2 pix) {
+    return (pix.y - frame.film_y0) * frame.film_width + (pix.x - frame.film_x0);
+}
+
 // The samples of pass p that pixel `pixel` takes: all of them, or with adaptive sampling those
 // below the index at which it stops (src/render/adaptive.rs decides it).
 uint film_sample_count(PassConstants p, uint pixel) {

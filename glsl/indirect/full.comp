@@ -63,6 +63,7 @@ layout(buffer_reference, scalar, buffer_reference_align = 8) writeonly buffer Re
 struct FullPixel {
     uvec2 pix;
     uint pixel;
+    uint slot;           // its sums' place in the device film (film_slot)
     FilmPixel acc;       // its sums and AOV planes, as read from the film
     vec4 a_direct, a_indirect, a_reflection;
     uint path;           // update: the path, and the index of its first record
@@ -88,10 +89,11 @@ bool full_begin(bool update, out FullPixel px) {
         return true;
     }
     if (!film_pixel(pc.film, px.pix, px.pixel)) return false;
-    px.acc = film[px.pixel];
-    px.a_direct = aovs[px.pixel * AOV_PLANES + AOV_DIRECT];
-    px.a_indirect = aovs[px.pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
-    px.a_reflection = aovs[px.pixel * AOV_PLANES + AOV_REFLECTION];
+    px.slot = film_slot(px.pix);
+    px.acc = film[px.slot];
+    px.a_direct = aovs[px.slot * AOV_PLANES + AOV_DIRECT];
+    px.a_indirect = aovs[px.slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
+    px.a_reflection = aovs[px.slot * AOV_PLANES + AOV_REFLECTION];
     return true;
 }
 
@@ -384,8 +386,8 @@ void main() {
     }
     if (update) return;
     px.acc.beauty_sq.w += float(rays);
-    film[px.pixel] = px.acc;
-    aovs[px.pixel * AOV_PLANES + AOV_DIRECT] = px.a_direct;
-    aovs[px.pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = px.a_indirect;
-    aovs[px.pixel * AOV_PLANES + AOV_REFLECTION] = px.a_reflection;
+    film[px.slot] = px.acc;
+    aovs[px.slot * AOV_PLANES + AOV_DIRECT] = px.a_direct;
+    aovs[px.slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = px.a_indirect;
+    aovs[px.slot * AOV_PLANES + AOV_REFLECTION] = px.a_reflection;
 }

@@ -30,10 +30,11 @@ void main() {
     uvec2 pix;
     uint pixel;
     if (!film_pixel(pc, pix, pixel)) return;
-    FilmPixel acc = film[pixel];
-    vec4 a_direct = aovs[pixel * AOV_PLANES + AOV_DIRECT];
-    vec4 a_indirect = aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
-    vec4 a_reflection = aovs[pixel * AOV_PLANES + AOV_REFLECTION];
+    uint slot = film_slot(pix);
+    FilmPixel acc = film[slot];
+    vec4 a_direct = aovs[slot * AOV_PLANES + AOV_DIRECT];
+    vec4 a_indirect = aovs[slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
+    vec4 a_reflection = aovs[slot * AOV_PLANES + AOV_REFLECTION];
     uint max_depth = frame.max_depth;
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint samples = film_sample_count(pc, pixel);
@@ -112,8 +113,8 @@ void main() {
         depth = 0u;
     }
     acc.beauty_sq.w += float(rays);
-    film[pixel] = acc;
-    aovs[pixel * AOV_PLANES + AOV_DIRECT] = a_direct;
-    aovs[pixel * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;
-    aovs[pixel * AOV_PLANES + AOV_REFLECTION] = a_reflection;
+    film[slot] = acc;
+    aovs[slot * AOV_PLANES + AOV_DIRECT] = a_direct;
+    aovs[slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;
+    aovs[slot * AOV_PLANES + AOV_REFLECTION] = a_reflection;
 }

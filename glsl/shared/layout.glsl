@@ -17,8 +17,8 @@
 #define BINDING_FRAME 0
 #define BINDING_FILM 1
 // The AOV planes an integrator declares (Integrator::aov_planes, src/render/integrator.rs): only
-// when it declares P > 0 of them, a storage buffer of P vec4 sums per pixel of the frame, plane k
-// of pixel p (= y * frame.width + x, as for the film) at aovs[p * P + k]; .rgb are the sums of the
+// when it declares P > 0 of them, a storage buffer of P vec4 sums per pixel of the device film,
+// plane k of the pixel in film slot p (film_slot, as for the film) at aovs[p * P + k]; .rgb are the sums of the
 // block's samples, .w is unused (keep it 0). Cleared and read back with the film, so the same
 // 256-sample block rules hold. A kernel declares it as
 //     layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
@@ -238,13 +238,13 @@ struct Frame {
                               // FEATURE_SHADOW_CULL; 0: off)
     uint control_variates;    // CONTROL_VARIATES_* (with FEATURE_CONTROL_VARIATES)
     uint dome_samples;        // a textured dome's light samples per N_max (light_count_for)
-    uint pad_frame0;
+    uint film_x0;             // the device film's window: its first column and row, and its
     uint64_t pixel_ends;      // uint per pixel: the sample index at which it stops (adaptive
                               // sampling, film_sample_count; 0: every pixel takes every sample)
     uint64_t pixel_order;     // uint array: pixel indices by descending end sample, which the
                               // dispatches of PassConstants.order take in prefixes (film_pixel)
-    uint pad_frame1;
-    uint pad_frame2;
+    uint film_y0;             // width (film_slot; a render holds the film of its job's pixels only)
+    uint film_width;
 };
 
 // Per-dispatch constants.

@@ -252,17 +252,21 @@ pub struct DeviceFilm<'a> {
     pub aovs: Option<&'a Buffer>,
     /// AOV planes in `aovs` (0 without it).
     pub aov_planes: usize,
+    /// The image pixels it covers, row-major (Frame.film_x0, film_y0, film_width; the kernels'
+    /// film_slot).
+    pub window: Window,
 }
 
-/// Reads the device film's pixels inside `window` (the device film covers the whole frame of
-/// `width` pixels a row), [`channels`] floats a pixel: FilmPixel's, then each AOV plane's vec4.
-pub fn download_window(
-    ctx: &Context,
-    film: DeviceFilm,
-    width: u32,
-    window: Window,
-) -> Result<Vec<f32>> {
-    let rows = window.y1 as usize * width as usize;
+/// Reads the device film's pixels inside `window` (within the film's own window), [`channels`]
+/// floats a pixel: FilmPixel's, then each AOV plane's vec4.
+pub fn download_window(ctx: &Context, film: DeviceFilm, window: Window) -> Result<Vec<f32>> {
+    let f = film.window;
+    assert!(
+        f.x0 <= window.x0 && window.x1 <= f.x1 && f.y0 <= window.y0 && window.y1 <= f.y1,
+        "window {window} outside the device film's {f}"
+    );
+    let width = f.width() as usize;
+    let rows = (window.y1 - f.y0) as usize * width;
     let raw: Vec<FilmPixel> = ctx.download(film.film, rows)?;
     let raw: &[f32] = bytemuck::cast_slice(&raw);
     let p = film.aov_planes;
@@ -274,9 +278,9 @@ pub fn download_window(
     let (c, a) = (channels(p), AOV_CHANNELS * p);
     let mut out = Vec::with_capacity(window.pixels() * c);
     for y in window.y0..window.y1 {
-        let row = (y * width) as usize;
-        for x in window.x0 as usize..window.x1 as usize {
-            let i = row + x;
+        let row = (y - f.y0) as usize * width;
+        for x in window.x0..window.x1 {
+            let i = row + (x - f.x0) as usize;
             out.extend_from_slice(&raw[i * FILM_CHANNELS..(i + 1) * FILM_CHANNELS]);
             if a > 0 {
                 out.extend_from_slice(&aovs[i * a..(i + 1) * a]);

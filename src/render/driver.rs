@@ -56,7 +56,7 @@ pub fn check_memory(
         None => match memory::available_bytes() {
             Some(a) => (
                 a,
-                "the memory available (MemAvailable, or the control group's limit)",
+                "the memory available (MemAvailable, or the control group's or the address-space limit)",
             ),
             None => return Ok(()),
         },
@@ -65,7 +65,10 @@ pub fn check_memory(
         return Err(Error::Invalid(format!(
             "a {}x{} film needs about {} of host memory ({per_pixel} B a pixel: exact sums, \
              a block read back, resolved planes) besides {} for the driver and kernels, more \
-             than {what}, {}; render it in parts (--part, --crop) or at a lower resolution",
+             than {what}, {}; a render of a fixed sample count is split into bands of rows \
+             where a band of 16 fits beside the frame's planes, but one with a time budget, a reference, a per-pass report, several \
+             seeds or a sample range is rendered whole: render it in parts (--part, --crop) or \
+             at a lower resolution",
             window.width(),
             window.height(),
             memory::format_bytes(need),
@@ -83,17 +86,21 @@ pub struct Setup {
     /// The frame constants: scene, camera, integrator and the settings' clamp and test hooks.
     pub frame: Frame,
     pub aov_planes: &'static [&'static str],
+    /// The pixels the device film covers (Frame.film_x0, film_y0, film_width).
+    pub film_window: Window,
 }
 
 impl Setup {
     /// Takes the kernels a prepared scene kept for the settings' integrator (else creates them)
-    /// and writes the frame constants of a render through `camera`.
+    /// and writes the frame constants of a render through `camera` into a device film that
+    /// covers `film_window`.
     pub fn new(
         ctx: &Context,
         prepared: &PreparedScene,
         camera: &Camera,
         settings: &RenderSettings,
         schedule: Schedule,
+        film_window: Window,
     ) -> Result<Setup> {
         let integrator = settings.integrator.clone();
         let aov_planes = integrator.aov_planes();
@@ -108,6 +115,7 @@ impl Setup {
             kernels,
             frame: Frame::default(),
             aov_planes,
+            film_window,
         };
         setup.configure(ctx, prepared, camera, settings, schedule)?;
         Ok(setup)
@@ -128,6 +136,8 @@ impl Setup {
         self.integrator.configure(&mut f);
         f.clamp_luminance = settings.clamp.unwrap_or(0.0);
         f.nan_every = settings.inject_non_finite;
+        let w = self.film_window;
+        (f.film_x0, f.film_y0, f.film_width) = (w.x0, w.y0, w.width());
         self.kernels
             .configure(ctx, prepared, &mut f, &*self.integrator, schedule)?;
         self.frame = f;
@@ -172,17 +182,21 @@ pub struct FilmBuffers {
     pub film: Buffer,
     pub aovs: Option<Buffer>,
     pub planes: usize,
+    /// The image pixels it covers.
+    pub window: Window,
 }
 
 impl FilmBuffers {
-    /// Buffers for `pixels` pixels and `planes` AOV planes; `label` names them for messages.
+    /// Buffers for the pixels of `window` and `planes` AOV planes; `label` names them for
+    /// messages.
     pub fn new(
         ctx: &Context,
         label: &str,
-        pixels: u64,
+        window: Window,
         planes: usize,
         usage: vk::BufferUsageFlags,
     ) -> Result<FilmBuffers> {
+        let pixels = window.pixels() as u64;
         let usage = usage | vk::BufferUsageFlags::STORAGE_BUFFER;
         let film = ctx.create_buffer(
             label,
@@ -199,7 +213,12 @@ impl FilmBuffers {
                 MemoryLocation::GpuOnly,
             )?),
         };
-        Ok(FilmBuffers { film, aovs, planes })
+        Ok(FilmBuffers {
+            film,
+            aovs,
+            planes,
+            window,
+        })
     }
 
     pub fn device(&self) -> film::DeviceFilm<'_> {
@@ -207,6 +226,7 @@ impl FilmBuffers {
             film: &self.film,
             aovs: self.aovs.as_ref(),
             aov_planes: self.planes,
+            window: self.window,
         }
     }
 }
@@ -440,8 +460,7 @@ impl Blocking<'_> {
             }
         } else if p.done < p.budget {
             // A time budget ended the render inside a block: keep what was rendered.
-            let block =
-                film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
+            let block = film::download_window(self.ctx, self.film.device(), self.window)?;
             p.sums.add_block(&block);
         }
         let resolved = match p.last_resolved.take() {
@@ -487,7 +506,7 @@ impl Blocking<'_> {
         if (p.first + p.done) % film::FILM_BLOCK == 0 || p.done == p.budget {
             return Ok(None);
         }
-        film::download_window(self.ctx, self.film.device(), self.width, self.window).map(Some)
+        film::download_window(self.ctx, self.film.device(), self.window).map(Some)
     }
 
     /// The next pass's sample count: half the samples so far (log-spaced points on the error
@@ -541,7 +560,7 @@ impl Blocking<'_> {
         let (Some(t), Some((ends, order, ring))) = (self.settings.adaptive, self.adaptive) else {
             return Ok(());
         };
-        let block = film::download_window(self.ctx, self.film.device(), self.width, ring)?;
+        let block = film::download_window(self.ctx, self.film.device(), ring)?;
         let channels = film::channels(planes.len());
         let mut sums = vec![0i128; block.len()];
         film::add_block(&mut sums, &block, channels);
@@ -641,7 +660,7 @@ impl Blocking<'_> {
     /// A complete block leaves the device: exact sums if the job owns all of it, else kept whole
     /// as a boundary block.
     fn commit_block(&self, p: &mut Progress, start: u32, end: u32) -> Result<()> {
-        let block = film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
+        let block = film::download_window(self.ctx, self.film.device(), self.window)?;
         if start >= self.range.0 && end <= self.range.1 {
             p.sums.add_block(&block);
         } else {
@@ -672,8 +691,7 @@ impl Blocking<'_> {
         // Reads the unfinished block without moving it: the block grid stays fixed.
         let mut peek = p.sums.all_sums();
         if (first + p.done) % film::FILM_BLOCK != 0 && first + p.done != last {
-            let block =
-                film::download_window(self.ctx, self.film.device(), self.width, self.window)?;
+            let block = film::download_window(self.ctx, self.film.device(), self.window)?;
             film::add_block(peek.to_mut(), &block, p.sums.channels());
         }
         let r = film::resolve(

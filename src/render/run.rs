@@ -50,18 +50,31 @@ impl Run {
             settings.integrator.aov_planes().len(),
             seeds,
         )?;
-        let mut setup = Setup::new(ctx, prepared, camera, settings, Schedule::Progressive)?;
+        // The device film covers the job's pixels; with adaptive sampling its pilot's, which
+        // contain them.
+        let pilot = settings
+            .adaptive
+            .map(|a| super::adaptive::pilot_window(&a, window, w, h));
+        let film_window = pilot.unwrap_or(window);
+        let mut setup = Setup::new(
+            ctx,
+            prepared,
+            camera,
+            settings,
+            Schedule::Progressive,
+            film_window,
+        )?;
         // Adaptive sampling: each pixel's end sample (all of them until the counts are
         // decided) and the order in which the dispatches take the pixels.
         let adaptive = match settings.adaptive {
-            Some(a) => {
+            Some(_) => {
                 let all = vec![u32::MAX; w as usize * h as usize];
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
                 let ends = ctx.upload("pixel ends", &all, usage)?;
                 let order = ctx.upload("pixel order", &all, usage)?;
                 setup.frame.pixel_ends = ends.address;
                 setup.frame.pixel_order = order.address;
-                Some((ends, order, super::adaptive::pilot_window(&a, window, w, h)))
+                Some((ends, order, film_window))
             }
             None => None,
         };
@@ -73,7 +86,7 @@ impl Run {
         let film = FilmBuffers::new(
             ctx,
             "film",
-            u64::from(w) * u64::from(h),
+            film_window,
             setup.aov_planes.len(),
             vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
         )?;

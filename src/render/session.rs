@@ -118,7 +118,8 @@ impl Renderer {
         let ctx = self.context().clone();
         settings.check(camera.width, camera.height)?;
         check_extent(camera, &target)?;
-        let setup = Setup::new(&ctx, prepared, camera, settings, Schedule::Fixed)?;
+        let full = crate::film::Window::full(camera.width, camera.height);
+        let setup = Setup::new(&ctx, prepared, camera, settings, Schedule::Fixed, full)?;
         let frame = ctx.upload(
             "session frame",
             std::slice::from_ref(&Frame::default()),
@@ -127,7 +128,7 @@ impl Renderer {
         let film = FilmBuffers::new(
             &ctx,
             "session film",
-            u64::from(camera.width) * u64::from(camera.height),
+            full,
             setup.aov_planes.len(),
             vk::BufferUsageFlags::TRANSFER_DST,
         )?;
