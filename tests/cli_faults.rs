@@ -367,3 +367,50 @@ fn a_film_over_the_memory_limit_is_refused_before_it_starts() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("lots"), "{err}");
 }
+
+/// Under an address-space limit (`ulimit -v`) the film is sized to what the process may still
+/// map: the frame renders in bands, or is refused naming the limit, and never aborts on a failed
+/// allocation (a 2048^2 render under 3 GB once ended with exit 134, or 139 inside the driver).
+#[test]
+fn an_address_space_limit_bands_or_refuses_the_render_and_never_aborts() {
+    use std::os::unix::process::CommandExt;
+    let dir = fresh_dir("address-space");
+    let out = dir.join("limited.exr");
+    let mut cmd = illum();
+    cmd.args([
+        "render",
+        "--integrator",
+        "direct",
+        "--width",
+        "1024",
+        "--height",
+        "512",
+        "--spp",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    // SAFETY: setrlimit is async-signal-safe; the child calls nothing else before exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 1_500_000 * 1024,
+                rlim_max: 1_500_000 * 1024,
+            };
+            if libc::setrlimit(libc::RLIMIT_AS, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let o = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    match o.status.code() {
+        Some(0) => assert!(err.contains("rendered in") && out.exists(), "{err}"),
+        Some(1) => assert!(
+            err.contains("address-space limit") && !out.exists(),
+            "{err}"
+        ),
+        c => panic!("exit {c:?} under an address-space limit: {err}"),
+    }
+}

@@ -374,7 +374,7 @@ fn a_split_full_render_merges_bit_identically() {
             parts.push(Part {
                 path: temp_path(&format!("full-part-{}-{}.exr", crop.y0, range.0)),
                 info: part_info(&s, &js, &out, "test").unwrap(),
-                sums: out.job.sums,
+                sums: out.job.unwrap().sums,
             });
         }
     }

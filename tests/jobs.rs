@@ -255,3 +255,100 @@ fn an_interrupted_job_writes_no_part() {
     assert!(e.to_string().contains("interrupted"), "{e}");
     assert_no_validation_messages(&ctx);
 }
+
+/// The memory limit under which `settings`' render of a `width` x `height` frame takes bands
+/// of `rows` rows (src/render/bands.rs): the process, the frame's planes and one band's film.
+fn limit_for_bands(settings: &RenderSettings, width: u32, height: u32, rows: u32) -> u64 {
+    use illum::film::memory;
+    let planes = settings.integrator.aov_planes().len();
+    let ring = if settings.adaptive.is_some() { 2 } else { 0 };
+    let pixels = u64::from(width) * u64::from(height);
+    memory::PROCESS_BYTES
+        + pixels * memory::frame_bytes_per_pixel(planes)
+        + u64::from(rows + ring) * u64::from(width) * memory::bytes_per_pixel(planes, false, false)
+}
+
+/// A frame whose film does not fit the memory budget renders in bands of rows in turn, each the
+/// crop it is: every plane bit for bit as the frame rendered whole, with the direct integrator,
+/// with `full` (its radiosity cache spans the frame) and with adaptive sampling (its pilot takes
+/// a ring of rows around each band). Cancelled after the first band, the rows rendered are kept
+/// and the rest say they took no sample.
+#[test]
+fn a_frame_too_large_for_the_memory_renders_in_bands_bit_identical() {
+    use illum::render::adaptive::Adaptive;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let ctx = context();
+    let mut scene = scene(SCENE);
+    (scene.camera.width, scene.camera.height) = (24, 40);
+    let r = Renderer::new(ctx.clone());
+    let params = illum::render::Params::new();
+    let cases = [
+        ("direct", None),
+        ("full", None),
+        ("direct", Some(Adaptive::threshold(0.05, 4))),
+    ];
+    for (name, adaptive) in cases {
+        let whole = RenderSettings {
+            integrator: illum::integrators::create(name, &params).unwrap(),
+            spp: 24,
+            seed: 5,
+            adaptive,
+            ..Default::default()
+        };
+        let banded = RenderSettings {
+            memory_limit: Some(limit_for_bands(&whole, 24, 40, 16)),
+            ..whole.clone()
+        };
+        let a = r.render(&scene, &whole, &mut |_, _| {}).unwrap();
+        let b = r.render(&scene, &banded, &mut |_, _| {}).unwrap();
+        let bands = b.stats.bands.expect("rendered in bands");
+        assert_eq!((bands.count, bands.rows, bands.done), (3, 16, 3), "{name}");
+        assert!(a.stats.bands.is_none() && b.job.is_none() && b.sums().is_err());
+        assert_eq!(
+            a.film, b.film,
+            "{name} {adaptive:?}: bands differ from the whole frame"
+        );
+        assert_eq!(a.stats.camera_samples, b.stats.camera_samples, "{name}");
+        assert_eq!(a.stats.rays, b.stats.rays, "{name}");
+        // One byte less and no band of 16 rows fits: refused, as the whole frame is.
+        let short = RenderSettings {
+            memory_limit: Some(limit_for_bands(&whole, 24, 40, 16) - 1),
+            ..whole.clone()
+        };
+        let s = r.render(&scene, &short, &mut |_, _| {});
+        assert!(s.is_err(), "{name}: rendered under a limit it cannot fit");
+    }
+
+    // Cancelled once the first band is done: its rows are the whole frame's, the others empty.
+    let cancel = Arc::new(AtomicBool::new(false));
+    let whole = RenderSettings {
+        integrator: illum::integrators::create("direct", &params).unwrap(),
+        spp: 24,
+        seed: 5,
+        ..Default::default()
+    };
+    let banded = RenderSettings {
+        memory_limit: Some(limit_for_bands(&whole, 24, 40, 16)),
+        cancel: Some(cancel.clone()),
+        ..whole.clone()
+    };
+    let a = r.render(&scene, &whole, &mut |_, _| {}).unwrap();
+    let flag = cancel.clone();
+    let b = r
+        .render(&scene, &banded, &mut |done, budget| {
+            if done * 3 >= budget && done > 0 {
+                flag.store(true, Ordering::Relaxed);
+            }
+        })
+        .unwrap();
+    let bands = b.stats.bands.unwrap();
+    assert!(b.stats.interrupted && bands.done == 1, "{bands:?}");
+    let first = 16 * 24;
+    assert_eq!(&b.film.beauty[..first], &a.film.beauty[..first]);
+    assert!(b.film.beauty[first..].iter().all(|p| *p == [0.0; 3]));
+    let samples = b.film.samples.as_ref().expect("a SampleCount plane");
+    assert!(samples[..first].iter().all(|&s| s == 24.0));
+    assert!(samples[first..].iter().all(|&s| s == 0.0));
+    assert_no_validation_messages(&ctx);
+}

@@ -363,9 +363,10 @@ impl Scene {
             && job
             && !r.interrupted
         {
+            // part_info refuses an output without sums (a frame rendered in bands).
             let info =
                 illum::jobs::part_info(&scene, &settings, &out, &r.meta.device).map_err(err)?;
-            r.part = Some((info, out.job.sums));
+            r.part = out.job.map(|j| (info, j.sums));
         }
         Ok(r)
     }

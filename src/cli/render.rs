@@ -62,8 +62,9 @@ pub struct RenderArgs {
     pub technique: Option<String>,
     #[command(flatten)]
     pub integrator: IntegratorArgs,
-    /// Host memory the film may take (e.g. 8G, 512MiB); a render that would need more is refused
-    /// before it starts. [default: the memory available]
+    /// Host memory the film may take (e.g. 8G, 512MiB). A frame whose film would need more is
+    /// rendered in bands of rows in turn (the same pixels) when its sample count is fixed, else
+    /// refused before it starts. [default: the memory available]
     #[arg(long, value_name = "SIZE", value_parser = crate::film::memory::parse_bytes)]
     pub memory_limit: Option<u64>,
     /// Firefly clamp: scale down (keeping the hue) any camera sample whose direct lighting has a
@@ -283,7 +284,16 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         return Err(Interrupted {
             signal: signal::received().unwrap_or(libc::SIGINT),
             wrote: true,
-            kept: format!("wrote {written} with {} of {spp} samples per pixel", s.spp),
+            kept: match s.bands {
+                Some(b) if b.done < b.count => format!(
+                    "wrote {written} with {} of {spp} samples per pixel in its first {} of {h} rows \
+                     (the frame was rendered in bands); the rows after them have no sample \
+                     (SampleCount 0)",
+                    s.spp,
+                    b.rows_done(h)
+                ),
+                _ => format!("wrote {written} with {} of {spp} samples per pixel", s.spp),
+            },
         }
         .into());
     }
@@ -397,7 +407,12 @@ fn summary(
     let last = out.passes.last().cloned().unwrap_or_default();
     let samples = s.camera_samples as f64;
     let pixels = f64::from(scene.camera.width) * f64::from(scene.camera.height);
-    let spp = if s.camera_samples == pixels as u64 * u64::from(s.spp) {
+    let rows = s
+        .bands
+        .map_or(scene.camera.height, |b| b.rows_done(scene.camera.height));
+    let spp = if rows < scene.camera.height {
+        format!("{} in the first {rows} rows (interrupted)", s.spp)
+    } else if s.camera_samples == pixels as u64 * u64::from(s.spp) {
         s.spp.to_string()
     } else {
         format!("{:.1} (adaptive, at most {})", samples / pixels, s.spp)
@@ -427,6 +442,15 @@ fn summary(
     );
     for (name, value) in &s.integrator {
         crate::note!("illum: {name}: {value}");
+    }
+    if let Some(b) = s.bands {
+        crate::note!(
+            "illum: the whole frame's film would not fit {} of memory: rendered in {} bands of {} \
+             rows in turn (the same pixels)",
+            crate::film::memory::format_bytes(b.budget),
+            b.count,
+            b.rows
+        );
     }
     let mut line = format!(
         "illum: {} spp, {:.3} s rendering ({:.3} s on the device)",
@@ -566,7 +590,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         .into());
     }
     let info = crate::jobs::part_info(&scene, &settings, &out, &ctx.info().name)?;
-    crate::jobs::partial::write_partial(&a.output, &info, &out.job.sums)?;
+    crate::jobs::partial::write_partial(&a.output, &info, &out.sums()?.sums)?;
     super::check_validation(&ctx)?;
     if !a.quiet {
         crate::note!(

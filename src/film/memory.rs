@@ -24,14 +24,21 @@ pub fn bytes_per_pixel(planes: usize, evaluate: bool, job: bool) -> u64 {
     sums + block + boundary + copy + 2 * resolved
 }
 
+/// Bytes per pixel of a frame rendered in bands (src/render/bands.rs) that stay held for the
+/// whole frame: its resolved planes (beauty, albedo, normal, emission, variance, depth, the sample
+/// counts and each AOV plane), twice while an output encodes them.
+pub fn frame_bytes_per_pixel(planes: usize) -> u64 {
+    2 * (5 * 12 + 4 + 4 + 12 * planes as u64)
+}
+
 /// The bytes of host memory a render of `pixels` pixels takes (see [`bytes_per_pixel`]).
 pub fn film_bytes(pixels: u64, planes: usize, evaluate: bool, job: bool) -> u64 {
     pixels.saturating_mul(bytes_per_pixel(planes, evaluate, job))
 }
 
 /// The memory this process may still take: what the kernel reports available, or less where a
-/// control group caps the process (cgroup v2 `memory.max` less `memory.current`). None where
-/// neither can be read.
+/// control group caps the process (cgroup v2 `memory.max` less `memory.current`) or an
+/// address-space limit does. None where none can be read.
 pub fn available_bytes() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
     let available = meminfo.as_deref().and_then(|m| {
@@ -48,10 +55,29 @@ pub fn available_bytes() -> Option<u64> {
         (Some(max), Some(current)) => Some(max.saturating_sub(current)),
         _ => None,
     };
-    match (available, cgroup) {
-        (Some(a), Some(c)) => Some(a.min(c)),
-        (a, c) => a.or(c),
+    [available, cgroup, address_space_left()]
+        .into_iter()
+        .flatten()
+        .min()
+}
+
+/// Under an address-space limit (`ulimit -v`, RLIMIT_AS) the process may map only so much more
+/// than it has (VmSize, the driver's mappings included): past it an allocation fails, and a
+/// render would abort (exit 134) instead of being refused.
+fn address_space_left() -> Option<u64> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes the struct it is given.
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } != 0 || r.rlim_cur == libc::RLIM_INFINITY
+    {
+        return None;
     }
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmSize:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(r.rlim_cur.saturating_sub(kib * 1024))
 }
 
 /// `bytes` for messages: "2.75 GB".

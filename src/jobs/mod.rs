@@ -96,11 +96,12 @@ pub fn part_info(
             out.stats.spp
         )));
     }
+    let job = out.sums()?;
     Ok(PartInfo {
-        samples: out.job.range,
-        window: out.job.sums.window,
+        samples: job.range,
+        window: job.sums.window,
         frame: (scene.camera.width, scene.camera.height),
-        spp: out.job.total_spp,
+        spp: job.total_spp,
         seed: settings.seed,
         scene_hash: scene_hash(scene),
         settings: settings_text(settings),
@@ -109,7 +110,7 @@ pub fn part_info(
         device: device.to_string(),
         render_seconds: out.stats.render_seconds,
         setup_seconds: out.stats.setup_seconds,
-        aov_planes: out.job.sums.aov_planes.clone(),
+        aov_planes: job.sums.aov_planes.clone(),
     })
 }
 

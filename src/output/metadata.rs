@@ -32,6 +32,12 @@ pub fn image_metadata(
             format!("{:.6}", s.device_seconds),
         ),
     ]);
+    if let Some(b) = s.bands {
+        extra.push((
+            "illum.bands".into(),
+            format!("{} of {} rows", b.count, b.rows),
+        ));
+    }
     if let Some(e) = last.estimated_relmse {
         extra.push(("illum.estimatedRelMSE".into(), format!("{e:.6e}")));
     }

@@ -7,6 +7,7 @@
 //! even and odd half-buffers (see [`crate::metrics`]).
 
 pub mod adaptive;
+mod bands;
 mod driver;
 pub mod film_kernel;
 mod integrator;
@@ -21,6 +22,7 @@ mod settings;
 use crate::film::{self, FilmSums};
 pub use crate::gpu_scene::SceneUpdate;
 pub use crate::vk::ImageState;
+pub use bands::Bands;
 pub use integrator::{Integrator, IntegratorPasses, Schedule};
 pub use params::Params;
 pub use prepared::PreparedScene;
@@ -85,6 +87,9 @@ pub struct RenderStats {
     pub integrator: Vec<(String, String)>,
     /// The render stopped early through [`RenderSettings::cancel`]; `spp` says how far it got.
     pub interrupted: bool,
+    /// How the frame was split into bands when its whole film would not fit the host memory
+    /// (src/render/bands.rs); None: rendered whole.
+    pub bands: Option<Bands>,
 }
 
 impl RenderStats {
@@ -116,8 +121,22 @@ pub struct RenderOutput {
     pub stats: RenderStats,
     /// One entry per pass when passes were evaluated; else only the last.
     pub passes: Vec<PassReport>,
-    /// The exact sums behind the film: what a split render's jobs merge.
-    pub job: JobSums,
+    /// The exact sums behind the film: what a split render's jobs merge. None for a frame
+    /// rendered in bands, whose sums were never held at once.
+    pub job: Option<JobSums>,
+}
+
+impl RenderOutput {
+    /// The exact sums behind the film, or why there are none.
+    pub fn sums(&self) -> Result<&JobSums> {
+        self.job.as_ref().ok_or_else(|| {
+            crate::error::Error::Invalid(
+                "the frame was rendered in bands (its film did not fit the memory): it has no \
+                 sums to write; render a job with a sample range or crop"
+                    .into(),
+            )
+        })
+    }
 }
 
 /// The exact film sums of a render or of one job of a split render (src/film/mod.rs).
@@ -214,6 +233,10 @@ impl Renderer {
         t0: Instant,
     ) -> Result<Vec<RenderOutput>> {
         let ctx = &self.ctx;
+        if let Some(plan) = bands::plan(settings, camera, seeds.len()) {
+            let out = self.render_bands(prepared, camera, settings, plan, progress, t0)?;
+            return Ok(vec![out]);
+        }
         let run = run::Run::new(self, prepared, camera, settings, seeds.len())?;
         let setup_seconds = t0.elapsed().as_secs_f64();
         let blocking = run.blocking(ctx, settings);

@@ -178,11 +178,11 @@ impl Run {
             stats,
             film: o.resolved.film,
             passes: o.passes,
-            job: super::JobSums {
+            job: Some(super::JobSums {
                 range: o.range,
                 total_spp: settings.spp,
                 sums: o.sums,
-            },
+            }),
         }
     }
 
