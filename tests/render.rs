@@ -297,6 +297,39 @@ fn exr_has_the_aov_layers_and_metadata() {
     std::fs::remove_file(&path).ok();
 }
 
+/// Uploads larger than the staging buffer go through it in pieces: parts land one after the
+/// other, and a write across a piece boundary lands where it was aimed.
+#[test]
+fn large_uploads_land_whole_through_a_bounded_staging_buffer() {
+    use ash::vk;
+    let ctx = context();
+    let words = |n: usize, seed: u32| -> Vec<u32> {
+        (0..n as u32)
+            .map(|k| (k ^ seed).wrapping_mul(2_654_435_761))
+            .collect()
+    };
+    let big = words(illum::vk::STAGING_BYTES / 4 + 3, 7);
+    let (head, tail) = (words(25, 1), words(10, 2));
+    let parts: [&[u8]; 3] = [
+        bytemuck::cast_slice(&head),
+        bytemuck::cast_slice(&big),
+        bytemuck::cast_slice(&tail),
+    ];
+    let buf = ctx
+        .upload_parts(
+            "large upload",
+            &parts,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC,
+        )
+        .unwrap();
+    let mut want: Vec<u32> = [&head[..], &big[..], &tail[..]].concat();
+    let patch = words(illum::vk::STAGING_BYTES / 4 + 1, 9);
+    ctx.write(&buf, 4 * 30, &patch).unwrap();
+    want[30..30 + patch.len()].copy_from_slice(&patch);
+    let got: Vec<u32> = ctx.download(&buf, want.len()).unwrap();
+    assert!(got == want, "the uploaded words differ");
+}
+
 /// Iterations glsl/render/loop_probe.comp counts in a nest of `outer` × `inner` loops (a direct
 /// measurement, with other loop shapes than the probe's 2 × 40000).
 fn loop_count(ctx: &illum::vk::Context, outer: u32, inner: u32) -> u32 {

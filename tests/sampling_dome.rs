@@ -61,9 +61,9 @@ fn dome_case(
     let table = dome::build(tex, tint, conv);
     let data = g
         .ctx
-        .upload(
+        .upload_parts(
             "dome table",
-            &table.data(),
+            &table.parts(),
             ash::vk::BufferUsageFlags::STORAGE_BUFFER,
         )
         .unwrap();

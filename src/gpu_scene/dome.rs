@@ -81,51 +81,60 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
         DomeConvention::Pbrt => 1.0,
         _ => (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin(),
     };
-    let mut weights = vec![0.0f64; w * h];
+    // The luminance of texel rows, each taken once (a cell reads up to 9 texels): entry i + 1 of
+    // row jj is lum(i, jj) for i in -1..=tw, so that the filters below read their neighbours
+    // as the lookup wraps them.
+    let mut rows = LumRows::new(|jj| (-1..=tw as i64).map(|i| lum(i, jj)).collect());
+    // Row by row (an 8192 x 4096 map's weights would take 268 MB at once).
+    let mut conditional = Vec::with_capacity(h * (w + 1));
+    let mut row_sums = Vec::with_capacity(h);
+    let mut row = vec![0.0f64; w];
     for j in 0..h {
-        for i in 0..w {
-            let (ii, jj) = (i as i64, j as i64);
-            let l = match (convention, texture.filter) {
-                (DomeConvention::Mitsuba, _) => {
-                    // Between column centres i, i + 1 (periodic) and rows j, j + 1.
-                    let wrap = |x: i64| x.rem_euclid(tw as i64);
-                    0.25 * (lum(wrap(ii), jj)
-                        + lum(wrap(ii + 1), jj)
-                        + lum(wrap(ii), jj + 1)
-                        + lum(wrap(ii + 1), jj + 1))
+        let jj = j as i64;
+        match (convention, texture.filter) {
+            (DomeConvention::Mitsuba, _) => {
+                // Between column centres i, i + 1 (periodic) and rows j, j + 1.
+                let (r0, r1) = rows.two(jj);
+                for (i, weight) in row.iter_mut().enumerate() {
+                    let i1 = (i + 1) % tw;
+                    let l = 0.25 * (r0[i + 1] + r0[i1 + 1] + r1[i + 1] + r1[i1 + 1]);
+                    *weight = l * row_measure(j);
                 }
-                (DomeConvention::Pbrt, _) | (DomeConvention::Illum, TextureFilter::Nearest) => {
-                    lum(ii, jj)
+            }
+            (DomeConvention::Pbrt, _) | (DomeConvention::Illum, TextureFilter::Nearest) => {
+                let r = rows.get(jj);
+                for (i, weight) in row.iter_mut().enumerate() {
+                    *weight = r[i + 1] * row_measure(j);
                 }
-                (DomeConvention::Illum, TextureFilter::Bilinear) => {
-                    // Texel integral of the bilinear reconstruction, wrapped as the lookup wraps.
-                    const K: [f64; 3] = [0.125, 0.75, 0.125];
+            }
+            (DomeConvention::Illum, TextureFilter::Bilinear) => {
+                // Texel integral of the bilinear reconstruction, wrapped as the lookup wraps.
+                const K: [f64; 3] = [0.125, 0.75, 0.125];
+                let r = rows.three(jj);
+                for (i, weight) in row.iter_mut().enumerate() {
                     let mut s = 0.0;
                     for (b, kb) in K.iter().enumerate() {
                         for (a, ka) in K.iter().enumerate() {
-                            s += ka * kb * lum(ii + a as i64 - 1, jj + b as i64 - 1);
+                            s += ka * kb * r[b][i + a];
                         }
                     }
-                    s
+                    *weight = s * row_measure(j);
                 }
-            };
-            weights[j * w + i] = l * row_measure(j);
+            }
         }
-    }
-    let total: f64 = weights.iter().sum();
-    if !(total > 0.0 && total.is_finite()) {
-        // A black (or broken) map: sample by solid angle so that the pdf stays valid.
-        for j in 0..h {
-            weights[j * w..(j + 1) * w].fill(row_measure(j));
-        }
-    }
-    let mut conditional = Vec::with_capacity(h * (w + 1));
-    let mut row_sums = Vec::with_capacity(h);
-    for j in 0..h {
-        let row = &weights[j * w..(j + 1) * w];
         let sum: f64 = row.iter().sum();
         row_sums.push(sum);
-        conditional.extend(cdf(row, sum));
+        conditional.extend(cdf(&row, sum));
+    }
+    let total: f64 = row_sums.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        // A black (or broken) map: sample by solid angle so that the pdf stays valid.
+        conditional.clear();
+        for (j, sum) in row_sums.iter_mut().enumerate() {
+            row.fill(row_measure(j));
+            *sum = row.iter().sum();
+            conditional.extend(cdf(&row, *sum));
+        }
     }
     let grand: f64 = row_sums.iter().sum();
     let marginal = cdf(&row_sums, grand);
@@ -170,33 +179,88 @@ fn guide(cdf: &[f32]) -> Vec<[u32; 2]> {
     const GUIDE_MARGIN: f64 = 1e-6;
     const U_MAX: f32 = 0.999_999_94; // the GPU clamps u to this
     let n = cdf.len() - 1;
-    let index = |x: f64| {
+    // index(x) = (entries of cdf[..n] <= x).max(1) - 1; both ends rise with k, so each is a
+    // pointer swept once along the CDF (the same indices as a binary search, in O(n)).
+    let sweep = |p: &mut usize, x: f64| {
         let x = (x.max(0.0) as f32).min(U_MAX);
-        cdf[..n].partition_point(|&c| c <= x).max(1) - 1
+        while *p < n && cdf[*p] <= x {
+            *p += 1;
+        }
+        (*p).max(1) - 1
     };
+    let (mut lo_p, mut hi_p) = (0, 0);
     (0..n)
         .map(|k| {
-            let lo = index(k as f64 / n as f64 - GUIDE_MARGIN);
-            let hi = index((k + 1) as f64 / n as f64 + GUIDE_MARGIN) + 1;
+            let lo = sweep(&mut lo_p, k as f64 / n as f64 - GUIDE_MARGIN);
+            let hi = sweep(&mut hi_p, (k + 1) as f64 / n as f64 + GUIDE_MARGIN) + 1;
             [lo as u32, hi as u32]
         })
         .collect()
 }
 
-impl DomeTable {
-    /// The data to upload as one buffer: the marginal CDF, the conditional CDFs, then the guides
-    /// (as u32 bit patterns).
-    pub fn data(&self) -> Vec<f32> {
-        let mut v = Vec::with_capacity(
-            self.marginal.len() + self.conditional.len() + 2 * self.guides.len(),
-        );
-        v.extend_from_slice(&self.marginal);
-        v.extend_from_slice(&self.conditional);
-        v.extend(self.guides.iter().flatten().map(|&g| f32::from_bits(g)));
-        v
+/// The luminance rows of a map, each computed once while the rows are visited in order (the
+/// filters read rows j - 1 to j + 1).
+struct LumRows<F: Fn(i64) -> Vec<f64>> {
+    make: F,
+    cache: Vec<(i64, Vec<f64>)>,
+}
+
+impl<F: Fn(i64) -> Vec<f64>> LumRows<F> {
+    fn new(make: F) -> Self {
+        LumRows {
+            make,
+            cache: Vec::new(),
+        }
     }
 
-    /// The GPU descriptor of the tables uploaded as [`DomeTable::data`] at device address `address`.
+    fn load(&mut self, jj: i64) -> usize {
+        if let Some(k) = self.cache.iter().position(|r| r.0 == jj) {
+            return k;
+        }
+        if self.cache.len() == 3 {
+            // The row visited longest ago (rows are visited in increasing order).
+            let oldest = (0..3).min_by_key(|&k| self.cache[k].0).unwrap();
+            self.cache.swap_remove(oldest);
+        }
+        self.cache.push((jj, (self.make)(jj)));
+        self.cache.len() - 1
+    }
+
+    fn get(&mut self, jj: i64) -> &[f64] {
+        let k = self.load(jj);
+        &self.cache[k].1
+    }
+
+    fn two(&mut self, jj: i64) -> (&[f64], &[f64]) {
+        self.load(jj);
+        self.load(jj + 1);
+        (self.find(jj), self.find(jj + 1))
+    }
+
+    fn three(&mut self, jj: i64) -> [&[f64]; 3] {
+        for d in -1..=1 {
+            self.load(jj + d);
+        }
+        [self.find(jj - 1), self.find(jj), self.find(jj + 1)]
+    }
+
+    fn find(&self, jj: i64) -> &[f64] {
+        &self.cache.iter().find(|r| r.0 == jj).expect("loaded").1
+    }
+}
+
+impl DomeTable {
+    /// The data to upload as one buffer, in three parts: the marginal CDF, the conditional
+    /// CDFs, then the guides (u32 pairs).
+    pub fn parts(&self) -> [&[u8]; 3] {
+        [
+            bytemuck::cast_slice(&self.marginal),
+            bytemuck::cast_slice(&self.conditional),
+            bytemuck::cast_slice(&self.guides),
+        ]
+    }
+
+    /// The GPU descriptor of the tables uploaded as [`DomeTable::parts`] at device address `address`.
     pub fn gpu(&self, address: u64) -> GpuDomeSampling {
         GpuDomeSampling {
             marginal: address,
@@ -299,6 +363,119 @@ mod tests {
             let row = &t.conditional[j * (w as usize + 1)..(j + 1) * (w as usize + 1)];
             let g0 = h as usize + j * w as usize;
             check(row, &t.guides[g0..g0 + w as usize]);
+        }
+    }
+
+    /// The tables from each texel's weight taken on its own (nine texel reads a cell for the
+    /// bilinear filter, as `build` did before it kept rows of luminance): bit for bit the same,
+    /// on every convention and filter, repeating and clamped.
+    #[test]
+    fn the_row_by_row_build_equals_the_per_texel_weights() {
+        use crate::scene::TextureWrap;
+        let (tw, th) = (7u32, 5u32);
+        let texels: Vec<Vec4> = (0..tw * th)
+            .map(|k| {
+                let x = ((k * 2_654_435_761) % 1000) as f32 / 100.0;
+                Vec4::new(x, 0.5 * x + (k % 3) as f32, 1.0 / (1.0 + x), 1.0)
+            })
+            .collect();
+        let tint = Vec3::new(1.0, 0.8, 0.6);
+        for conv in [
+            DomeConvention::Illum,
+            DomeConvention::Mitsuba,
+            DomeConvention::Pbrt,
+        ] {
+            for filter in [TextureFilter::Bilinear, TextureFilter::Nearest] {
+                for wrap in [TextureWrap::Repeat, TextureWrap::Clamp] {
+                    let mut t = Texture::new("t", tw, th, texels.clone());
+                    t.filter = filter;
+                    t.wrap = [wrap, wrap];
+                    let table = build(&t, tint, conv);
+                    let lum = |i: i64, j: i64| {
+                        luminance((tint * t.texel(i, j).truncate()).as_dvec3()).max(0.0)
+                    };
+                    let (w, h) = cells(conv, tw, th);
+                    let (w, h) = (w as usize, h as usize);
+                    let mut row_sums = Vec::new();
+                    let mut conditional = Vec::new();
+                    for j in 0..h {
+                        let measure = match conv {
+                            DomeConvention::Pbrt => 1.0,
+                            _ => (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin(),
+                        };
+                        let row: Vec<f64> = (0..w as i64)
+                            .map(|i| {
+                                let j = j as i64;
+                                let l = match (conv, filter) {
+                                    (DomeConvention::Mitsuba, _) => {
+                                        let wr = |x: i64| x.rem_euclid(tw as i64);
+                                        0.25 * (lum(wr(i), j)
+                                            + lum(wr(i + 1), j)
+                                            + lum(wr(i), j + 1)
+                                            + lum(wr(i + 1), j + 1))
+                                    }
+                                    (DomeConvention::Illum, TextureFilter::Bilinear) => {
+                                        const K: [f64; 3] = [0.125, 0.75, 0.125];
+                                        let mut s = 0.0;
+                                        for (b, kb) in K.iter().enumerate() {
+                                            for (a, ka) in K.iter().enumerate() {
+                                                s += ka
+                                                    * kb
+                                                    * lum(i + a as i64 - 1, j + b as i64 - 1);
+                                            }
+                                        }
+                                        s
+                                    }
+                                    _ => lum(i, j),
+                                };
+                                l * measure
+                            })
+                            .collect();
+                        let sum: f64 = row.iter().sum();
+                        row_sums.push(sum);
+                        conditional.extend(cdf(&row, sum));
+                    }
+                    let grand: f64 = row_sums.iter().sum();
+                    let what = format!("{conv:?} {filter:?} {wrap:?}");
+                    assert_eq!(table.conditional, conditional, "{what}");
+                    assert_eq!(table.marginal, cdf(&row_sums, grand), "{what}");
+                    assert_eq!(table.integral, grand / (w * h) as f64, "{what}");
+                }
+            }
+        }
+    }
+
+    /// The guides' linear sweep gives the indices of a binary search of each bucket's ends.
+    #[test]
+    fn the_guide_sweep_equals_the_binary_search() {
+        let mut x = 12_345u64;
+        let mut next = move || {
+            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (x >> 40) as f64 / (1u64 << 24) as f64
+        };
+        for n in [1usize, 2, 3, 17, 256, 1000] {
+            // Weights with zero stretches and a peak: repeated CDF values, tiny and huge steps.
+            let weights: Vec<f64> = (0..n)
+                .map(|k| match k % 7 {
+                    0 | 1 => 0.0,
+                    3 => 1e6 * next(),
+                    _ => next(),
+                })
+                .collect();
+            let sum = weights.iter().sum();
+            let c = cdf(&weights, sum);
+            let index = |x: f64| {
+                let x = (x.max(0.0) as f32).min(0.999_999_94);
+                c[..n].partition_point(|&v| v <= x).max(1) - 1
+            };
+            let expected: Vec<[u32; 2]> = (0..n)
+                .map(|k| {
+                    let lo = index(k as f64 / n as f64 - 1e-6);
+                    let hi = index((k + 1) as f64 / n as f64 + 1e-6) + 1;
+                    [lo as u32, hi as u32]
+                })
+                .collect();
+            assert_eq!(guide(&c), expected, "n {n}");
         }
     }
 }

@@ -11,8 +11,9 @@ use crate::scene::{
 };
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
-/// Encodes `scene` relative to `origin`. Without `geometry`, mesh vertices, positions, indices
-/// and texels are left out (an update compares positions and indices with the scene directly).
+/// Encodes `scene` relative to `origin`. Without `geometry`, mesh vertices, positions and indices
+/// are left out (an update compares positions and indices with the scene directly). Texels are
+/// never copied: they are uploaded from the scene's textures.
 pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Result<Host> {
     let meshes = encode_meshes(scene, geometry);
     let instances = encode_instances(scene, origin, &meshes.ranges);
@@ -24,7 +25,7 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
     let emissive_features = add_emissive_shapes(scene, origin, &mut shapes, &mut lights)
         | add_emissive_triangles(scene, origin, &mut lights);
     let materials = scene.materials.iter().map(material).collect();
-    let (textures, texels) = encode_textures(scene, geometry);
+    let textures = encode_textures(scene);
     light_mean::set_means(&mut lights, &scene.textures);
     let aabbs = shapes.iter().map(shape_aabb).collect();
     let light_bvh = lights::build(&lights);
@@ -55,7 +56,6 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
         lights,
         materials,
         textures,
-        texels,
         dark_lights: scene_lights.dark_lights,
         dome: scene_lights.dome,
         light_bvh,
@@ -398,18 +398,19 @@ fn material(m: &Material) -> GpuMaterial {
     g
 }
 
-/// The textures' headers, and (with `geometry`) their texels in one table.
-fn encode_textures(scene: &Scene, geometry: bool) -> (Vec<GpuTexture>, Vec<[f32; 4]>) {
-    let mut textures = Vec::new();
-    let mut texels: Vec<[f32; 4]> = Vec::new();
+/// The textures' headers; their texels are uploaded from the scene, one after the other
+/// (`update::Tables::upload`), each at the offset its header gives.
+fn encode_textures(scene: &Scene) -> Vec<GpuTexture> {
+    let mut offset = 0usize;
+    let wrap = |w: TextureWrap| match w {
+        TextureWrap::Repeat => TEXTURE_WRAP_REPEAT,
+        TextureWrap::Clamp => TEXTURE_WRAP_CLAMP,
+        TextureWrap::Mirror => TEXTURE_WRAP_MIRROR,
+    };
+    let mut textures = Vec::with_capacity(scene.textures.len());
     for t in &scene.textures {
-        let wrap = |w: TextureWrap| match w {
-            TextureWrap::Repeat => TEXTURE_WRAP_REPEAT,
-            TextureWrap::Clamp => TEXTURE_WRAP_CLAMP,
-            TextureWrap::Mirror => TEXTURE_WRAP_MIRROR,
-        };
         textures.push(GpuTexture {
-            offset: texels.len() as u32,
+            offset: offset as u32,
             width: t.width,
             height: t.height,
             flags: if t.filter == TextureFilter::Nearest {
@@ -419,11 +420,9 @@ fn encode_textures(scene: &Scene, geometry: bool) -> (Vec<GpuTexture>, Vec<[f32;
             } | wrap(t.wrap[0]) << TEXTURE_WRAP_SHIFT_U
                 | wrap(t.wrap[1]) << TEXTURE_WRAP_SHIFT_V,
         });
-        if geometry {
-            texels.extend(t.texels.iter().map(|v| v.to_array()));
-        }
+        offset += t.texels.len();
     }
-    (textures, texels)
+    textures
 }
 
 /// Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).

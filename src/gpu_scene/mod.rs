@@ -96,7 +96,6 @@ pub(crate) struct Host {
     lights: Vec<GpuLight>,
     materials: Vec<GpuMaterial>,
     textures: Vec<GpuTexture>,
-    texels: Vec<[f32; 4]>,
     dark_lights: Vec<String>,
     dome: u32,
     light_bvh: lights::LightBvh,
@@ -136,7 +135,7 @@ impl GpuScene {
             bytemuck::cast_slice(&h.aabbs),
             storage | build_input,
         )?;
-        let tables = update::Tables::upload(ctx, &h)?;
+        let tables = update::Tables::upload(ctx, &h, scene)?;
         let fixed_data = update::fixed_data(scene);
         let mut frame = Frame::default();
         tables.write_frame(&mut frame, &h);

@@ -64,14 +64,22 @@ pub(crate) fn decode(
                 ImageKind::Jpeg => image::ImageFormat::Jpeg,
                 _ => image::ImageFormat::Hdr,
             };
-            let img = image::load_from_memory_with_format(bytes, format)
-                .map_err(|e| e.to_string())?
-                .into_rgba32f();
-            let (w, h) = img.dimensions();
-            let texels = img
-                .pixels()
-                .map(|p| Vec4::from_array(p.0))
-                .collect::<Vec<_>>();
+            let img =
+                image::load_from_memory_with_format(bytes, format).map_err(|e| e.to_string())?;
+            let (w, h) = (img.width(), img.height());
+            // Float images straight to RGBA texels: through `into_rgba32f` an 8192 x 4096 HDR
+            // map took another 537 MB and its page faults.
+            let texels = match img {
+                image::DynamicImage::ImageRgb32F(b) => b
+                    .pixels()
+                    .map(|p| Vec4::new(p.0[0], p.0[1], p.0[2], 1.0))
+                    .collect::<Vec<_>>(),
+                other => other
+                    .into_rgba32f()
+                    .pixels()
+                    .map(|p| Vec4::from_array(p.0))
+                    .collect(),
+            };
             (w, h, texels)
         }
     };

@@ -9,6 +9,9 @@ use gpu_allocator::vulkan::{
 };
 use std::sync::Mutex;
 
+/// The largest staging buffer an upload makes; larger data is copied through it in turn.
+pub const STAGING_BYTES: usize = 64 << 20;
+
 /// gpu-allocator behind a lock; emptied before the device is destroyed.
 pub struct Allocator(Mutex<Option<gpu_allocator::vulkan::Allocator>>);
 
@@ -150,18 +153,33 @@ impl Context {
         data: &[T],
         usage: vk::BufferUsageFlags,
     ) -> Result<Buffer> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
+        self.upload_parts(name, &[bytemuck::cast_slice(data)], usage)
+    }
+
+    /// A device-local buffer holding `parts` one after the other, copied from where they are
+    /// (a scene's textures, a dome's tables) without first joining them on the host.
+    pub fn upload_parts(
+        &self,
+        name: &str,
+        parts: &[&[u8]],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Buffer> {
+        let size: u64 = parts.iter().map(|p| p.len() as u64).sum();
         self.uploads
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.uploaded_bytes
-            .fetch_add(bytes.len() as u64, std::sync::atomic::Ordering::Relaxed);
+            .fetch_add(size, std::sync::atomic::Ordering::Relaxed);
         let dst = self.create_buffer(
             name,
-            bytes.len() as u64,
+            size,
             usage | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
-        self.stage(name, &dst, 0, bytes)?;
+        let mut offset = 0;
+        for part in parts {
+            self.stage(name, &dst, offset, part)?;
+            offset += part.len() as u64;
+        }
         Ok(dst)
     }
 
@@ -183,36 +201,42 @@ impl Context {
         self.stage("write", dst, offset, bytes)
     }
 
-    /// Copies `bytes` into `dst` at `offset` through a staging buffer, and waits.
+    /// Copies `bytes` into `dst` at `offset` through a staging buffer of at most
+    /// [`STAGING_BYTES`], in turn, and waits: a large upload never doubles in host memory.
     fn stage(&self, name: &str, dst: &Buffer, offset: u64, bytes: &[u8]) -> Result<()> {
         if bytes.is_empty() {
             return Ok(());
         }
+        let chunk = bytes.len().min(STAGING_BYTES);
         let mut staging = self.create_buffer(
             &format!("{name} (staging)"),
-            bytes.len() as u64,
+            chunk as u64,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging
-            .mapped()
-            .ok_or_else(|| Error::Invalid("staging buffer is not host visible".into()))?
-            [..bytes.len()]
-            .copy_from_slice(bytes);
-        self.one_shot(|cmd| {
-            // SAFETY: both buffers are alive until the submission completes; every earlier
-            // submission using `dst` has completed (one_shot waits).
-            unsafe {
-                self.device.cmd_copy_buffer(
-                    cmd,
-                    staging.buffer,
-                    dst.buffer,
-                    &[vk::BufferCopy::default()
-                        .dst_offset(offset)
-                        .size(bytes.len() as u64)],
-                )
-            }
-        })
+        for (k, piece) in bytes.chunks(chunk).enumerate() {
+            staging
+                .mapped()
+                .ok_or_else(|| Error::Invalid("staging buffer is not host visible".into()))?
+                [..piece.len()]
+                .copy_from_slice(piece);
+            let at = offset + (k * chunk) as u64;
+            self.one_shot(|cmd| {
+                // SAFETY: both buffers are alive until the submission completes; every earlier
+                // submission using `dst` or the staging buffer has completed (one_shot waits).
+                unsafe {
+                    self.device.cmd_copy_buffer(
+                        cmd,
+                        staging.buffer,
+                        dst.buffer,
+                        &[vk::BufferCopy::default()
+                            .dst_offset(at)
+                            .size(piece.len() as u64)],
+                    )
+                }
+            })?;
+        }
+        Ok(())
     }
 
     /// Buffers uploaded so far through [`Context::upload`], and their bytes.

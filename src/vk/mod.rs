@@ -16,7 +16,7 @@ pub use context::{Context, ContextOptions, ExternalDevice, KernelListener};
 pub use devices::{DeviceInfo, list_devices};
 pub use error::{Error, VkResultExt};
 pub use gpu_allocator::MemoryLocation;
-pub use memory::Buffer;
+pub use memory::{Buffer, STAGING_BYTES};
 pub use pipeline::{ComputePipeline, kernel_times, process_cpu_seconds};
 pub use requirements::{FeatureSet, Requirements, requirements};
 pub use timer::GpuTimer;
