@@ -65,6 +65,9 @@ pub struct Inner {
     /// devices only: an embedding application keeps its own caches).
     pub(crate) pipeline_cache: vk::PipelineCache,
     pub(crate) pipeline_cache_file: Option<std::path::PathBuf>,
+    /// With ILLUM_KERNEL_STATS=1 on a device that has VK_KHR_pipeline_executable_properties:
+    /// each kernel's compiled statistics (registers, spills, ...) are printed at creation.
+    pub(crate) executable_stats: Option<ash::khr::pipeline_executable_properties::Device>,
     owned: bool,
 }
 
@@ -203,7 +206,7 @@ impl Context {
                 None
             };
             let result = Self::create_device(&instance, opts);
-            let (pd, device, qf, rq, info) = match result {
+            let (pd, device, qf, rq, info, stats) = match result {
                 Ok(v) => v,
                 Err(e) => {
                     if let Some((du, m)) = &debug {
@@ -214,8 +217,10 @@ impl Context {
                 }
             };
             let queue = device.get_device_queue(qf, 0);
+            let stats = stats
+                .then(|| ash::khr::pipeline_executable_properties::Device::new(&instance, &device));
             Self::finish(
-                entry, instance, pd, device, queue, qf, rq, info, debug, messages, true,
+                entry, instance, pd, device, queue, qf, rq, info, debug, messages, true, stats,
             )
         }
     }
@@ -265,6 +270,7 @@ impl Context {
                 None,
                 Arc::new(Mutex::new(Vec::new())),
                 false,
+                None,
             )
         }
     }
@@ -272,7 +278,7 @@ impl Context {
     unsafe fn create_device(
         instance: &ash::Instance,
         opts: &ContextOptions,
-    ) -> Result<(vk::PhysicalDevice, ash::Device, u32, bool, DeviceInfo)> {
+    ) -> Result<(vk::PhysicalDevice, ash::Device, u32, bool, DeviceInfo, bool)> {
         unsafe {
             let pds = instance
                 .enumerate_physical_devices()
@@ -310,12 +316,37 @@ impl Context {
             let mut fas = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
                 .acceleration_structure(true);
             let mut frq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+            // Kernel statistics only when asked for: capturing them may slow compilation.
+            let stats = super::pipeline::kernel_stats()
+                && instance
+                    .enumerate_device_extension_properties(pd)
+                    .unwrap_or_default()
+                    .iter()
+                    .any(|e| {
+                        e.extension_name_as_c_str()
+                            == Ok(ash::khr::pipeline_executable_properties::NAME)
+                    });
+            if super::pipeline::kernel_stats() && !stats {
+                crate::note!(
+                    "illum: ILLUM_KERNEL_STATS: {} has no VK_KHR_pipeline_executable_properties; \
+                     no kernel statistics",
+                    info.name
+                );
+            }
+            let mut fstats = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
+                .pipeline_executable_info(true);
+            if stats {
+                exts.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
+            }
             let base = vk::PhysicalDeviceFeatures::default().shader_int64(true);
             let mut f2 = vk::PhysicalDeviceFeatures2::default()
                 .features(base)
                 .push_next(&mut f12);
             if rq {
                 f2 = f2.push_next(&mut fas).push_next(&mut frq);
+            }
+            if stats {
+                f2 = f2.push_next(&mut fstats);
             }
             let dinfo = vk::DeviceCreateInfo::default()
                 .queue_create_infos(&qinfo)
@@ -324,7 +355,7 @@ impl Context {
             let device = instance
                 .create_device(pd, &dinfo, None)
                 .vk("vkCreateDevice")?;
-            Ok((pd, device, qf, rq, info))
+            Ok((pd, device, qf, rq, info, stats))
         }
     }
 
@@ -341,6 +372,7 @@ impl Context {
         debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         messages: Arc<Mutex<Vec<String>>>,
         owned: bool,
+        executable_stats: Option<ash::khr::pipeline_executable_properties::Device>,
     ) -> Result<Context> {
         unsafe {
             let accel =
@@ -405,6 +437,7 @@ impl Context {
                 builds: Default::default(),
                 pipeline_cache,
                 pipeline_cache_file: file,
+                executable_stats,
                 owned,
             })))
         }

@@ -88,9 +88,15 @@ impl ComputePipeline {
                 .name(c"main")
                 .specialization_info(&spec_info);
             let (t0, cpu0) = (std::time::Instant::now(), process_cpu_seconds());
+            let flags = if ctx.executable_stats.is_some() {
+                vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR
+            } else {
+                vk::PipelineCreateFlags::empty()
+            };
             let created = dev.create_compute_pipelines(
                 ctx.pipeline_cache,
                 &[vk::ComputePipelineCreateInfo::default()
+                    .flags(flags)
                     .stage(stage)
                     .layout(p.layout)],
                 None,
@@ -107,6 +113,9 @@ impl ComputePipeline {
                 );
             }
             p.pipeline = created.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
+            if let Some(x) = &ctx.executable_stats {
+                print_stats(x, p.pipeline, name);
+            }
             if let Some(file) = &ctx.pipeline_cache_file {
                 super::pipeline_cache::save(dev, ctx.pipeline_cache, file);
             }
@@ -207,6 +216,60 @@ impl ComputePipeline {
 /// driver's compile time, docs/performance-kernels.md).
 pub fn kernel_times() -> bool {
     std::env::var("ILLUM_KERNEL_TIMES").is_ok_and(|v| v != "0" && !v.is_empty())
+}
+
+/// ILLUM_KERNEL_STATS=1: on a device with VK_KHR_pipeline_executable_properties, each kernel's
+/// statistics as the driver reports them (register count, spills, instruction count, ...) are
+/// printed on stderr at its creation (docs/performance-kernels.md, "Kernel statistics").
+pub fn kernel_stats() -> bool {
+    std::env::var("ILLUM_KERNEL_STATS").is_ok_and(|v| v != "0" && !v.is_empty())
+}
+
+/// Prints the driver's statistics of every executable of `pipeline`, one line each.
+///
+/// # Safety
+/// `pipeline` was created with CAPTURE_STATISTICS_KHR on the device of `x`.
+unsafe fn print_stats(
+    x: &ash::khr::pipeline_executable_properties::Device,
+    pipeline: vk::Pipeline,
+    name: &str,
+) {
+    let info = vk::PipelineInfoKHR::default().pipeline(pipeline);
+    // SAFETY: as the caller promises.
+    let executables = unsafe { x.get_pipeline_executable_properties(&info) }.unwrap_or_default();
+    for (k, e) in executables.iter().enumerate() {
+        let what = e
+            .name_as_c_str()
+            .map_or(String::new(), |c| c.to_string_lossy().into());
+        let ei = vk::PipelineExecutableInfoKHR::default()
+            .pipeline(pipeline)
+            .executable_index(k as u32);
+        // SAFETY: as above; the index is one of the pipeline's executables.
+        let stats = unsafe { x.get_pipeline_executable_statistics(&ei) }.unwrap_or_default();
+        let values: Vec<String> = stats
+            .iter()
+            .map(|s| {
+                let n = s
+                    .name_as_c_str()
+                    .map_or(String::new(), |c| c.to_string_lossy().into());
+                // SAFETY: the union member read is the one `format` names.
+                let v = unsafe {
+                    match s.format {
+                        vk::PipelineExecutableStatisticFormatKHR::BOOL32 => s.value.b32.to_string(),
+                        vk::PipelineExecutableStatisticFormatKHR::INT64 => s.value.i64.to_string(),
+                        vk::PipelineExecutableStatisticFormatKHR::UINT64 => s.value.u64.to_string(),
+                        _ => format!("{:.4}", s.value.f64),
+                    }
+                };
+                format!("{n} {v}")
+            })
+            .collect();
+        crate::note!(
+            "illum: kernel {name} statistics ({what}, subgroup {}): {}",
+            e.subgroup_size,
+            values.join(", ")
+        );
+    }
 }
 
 /// User plus system CPU seconds of the whole process (all threads): on a loaded machine a
