@@ -420,7 +420,8 @@ fn summary(
     crate::note!(
         "illum: {}x{} at {} spp in {:.2} s on {} via {}: upload {:.3} s, structure build {:.3} s \
          ({} triangles; BLAS {:.1} MiB after compaction from {:.1}, TLAS {:.2} MiB), render {:.2} s \
-         ({:.2} M camera samples/s, {:.2} M rays/s, {:.2} rays per sample); {} non-finite samples; wrote {}",
+         ({:.2} M camera samples/s, {:.2} M rays/s, {:.2} rays per sample; kernels {:.2} s on the device, {} submissions, \
+         block commits {:.2} s); {} non-finite samples; wrote {}",
         scene.camera.width,
         scene.camera.height,
         spp,
@@ -437,6 +438,9 @@ fn summary(
         samples / s.render_seconds / 1e6,
         s.rays as f64 / s.render_seconds / 1e6,
         s.rays as f64 / samples,
+        s.device_seconds,
+        s.submissions,
+        s.commit_seconds,
         s.non_finite_samples,
         written,
     );

@@ -292,7 +292,7 @@ impl Accumulator {
             height,
             aov_planes,
             channels,
-            sums: vec![0; n * channels],
+            sums: crate::film::zeroed_sums(n * channels),
             seen: vec![Vec::new(); n],
         }
     }

@@ -139,6 +139,8 @@ impl Renderer {
                 stats.warmup_seconds += b.warmup_seconds;
                 stats.render_seconds += b.render_seconds;
                 stats.device_seconds += b.device_seconds;
+                stats.commit_seconds += b.commit_seconds;
+                stats.submissions += b.submissions;
                 stats.camera_samples += b.camera_samples;
                 stats.non_finite_samples += b.non_finite_samples;
                 stats.clamped_samples += b.clamped_samples;

@@ -17,6 +17,13 @@ use std::time::Instant;
 /// Tiles of at most this many pixels a side: one dispatch each.
 pub const TILE: u32 = 512;
 
+/// The wall time a submission is sized to once the driver has measured the device's rate: long
+/// enough that a submission's fixed costs (recording, submitting, waiting on its fence: about
+/// 1 ms each on a GPU behind a sandbox, docs/performance-gpu.md) stay small, short enough that a
+/// cancel, a time budget or a frame of the view is answered within it, and far below any
+/// driver watchdog.
+pub const SUBMIT_SECONDS: f64 = 0.05;
+
 /// Fails when the render asks for another trace path than the scene was prepared for.
 pub fn check_trace(prepared: &PreparedScene, mode: TraceMode) -> Result<()> {
     let wanted = match mode {
@@ -311,6 +318,11 @@ pub struct Progress {
     done: u32,
     wall: f64,
     device: f64,
+    /// Wall seconds spent moving complete blocks off the device and adding them up.
+    commit: f64,
+    /// Submissions so far, and the camera samples per wall second of the last one (0: none yet).
+    submissions: u64,
+    rate: f64,
     interrupted: bool,
     sums: film::FilmSums,
     passes: Vec<super::PassReport>,
@@ -399,6 +411,9 @@ impl Blocking<'_> {
             done: 0,
             wall: 0.0,
             device: 0.0,
+            commit: 0.0,
+            submissions: 0,
+            rate: 0.0,
             interrupted: false,
             sums: film::FilmSums::new(self.window, planes.clone()),
             planes,
@@ -488,6 +503,8 @@ impl Blocking<'_> {
             done: p.done,
             wall: p.wall,
             device: p.device,
+            commit: p.commit,
+            submissions: p.submissions,
             interrupted: p.interrupted,
             sums: p.sums,
             passes: p.passes,
@@ -545,9 +562,12 @@ impl Blocking<'_> {
         while s < t.min_spp {
             let n = self.per_dispatch.min(t.min_spp - s);
             let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
-            for pc in tiles(ring, s, n, seed) {
-                self.ctx.one_shot(|cmd| kernels.record(cmd, &pc))?;
-            }
+            let dispatches = tiles(ring, s, n, seed);
+            self.ctx.one_shot(|cmd| {
+                for pc in &dispatches {
+                    kernels.record(cmd, pc)
+                }
+            })?;
             s += n;
         }
         Ok(())
@@ -619,33 +639,40 @@ impl Blocking<'_> {
             let s = from + k;
             let (block_start, block_end) = film::block_of(s, self.settings.spp);
             // With adaptive sampling, the pixels still sampling at s, packed: as few as they are,
-            // a dispatch may take more samples of each.
+            // a submission may take more samples of each.
             let active = p.stop.map(|_| p.ends.partition_point(|&e| e > s) as u32);
-            let per_dispatch = match active {
-                Some(a) if !self.loop_limited => {
-                    (self.settings.samples_per_submit / u64::from(a.clamp(1, TILE * TILE)))
-                        .clamp(1, u64::from(film::FILM_BLOCK)) as u32
-                }
-                _ => self.per_dispatch,
-            };
-            let n = per_dispatch.min(pass - k).min(block_end - s);
+            let pixels = active.map_or(self.window.pixels() as u64, u64::from).max(1);
+            let n = self
+                .samples_per_submission(p, pixels)
+                .min(pass - k)
+                .min(block_end - s);
             // The integrator's own state (a cache generation) may end a dispatch early.
             let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
             let dispatches = match active {
                 Some(a) => packed(a, s, n, seed),
                 None => tiles(self.window, s, n, seed),
             };
-            for pc in dispatches {
-                self.ctx.one_shot(|cmd| {
-                    crate::vk::GpuTimer::around(self.timer, cmd, || kernels.record(cmd, &pc))
-                })?;
-                if let Some(t) = self.timer {
-                    p.device += t.seconds()?;
-                }
+            // Every tile (or pack) of these samples in one submission: they write disjoint
+            // pixels, so no barrier stands between them (IntegratorPasses::record).
+            let started = Instant::now();
+            self.ctx.one_shot(|cmd| {
+                crate::vk::GpuTimer::around(self.timer, cmd, || {
+                    for pc in &dispatches {
+                        kernels.record(cmd, pc)
+                    }
+                })
+            })?;
+            let wall = started.elapsed().as_secs_f64();
+            p.submissions += 1;
+            p.rate = (pixels * u64::from(n)) as f64 / wall.max(1e-6);
+            if let Some(t) = self.timer {
+                p.device += t.seconds()?;
             }
             k += n;
             if s + n == block_end {
+                let started = Instant::now();
                 self.commit_block(p, block_start, block_end)?;
+                p.commit += started.elapsed().as_secs_f64();
             }
             progress(p.done + k, budget);
             if self.cancelled() {
@@ -655,6 +682,19 @@ impl Blocking<'_> {
             }
         }
         Ok(k)
+    }
+
+    /// Samples per pixel of the next submission over `pixels` pixels: at least the settings'
+    /// samples_per_submit camera samples, and as many as the last submission's rate renders in
+    /// [`SUBMIT_SECONDS`]; one where the driver cuts long loops short. The split changes no
+    /// pixel: each pixel's samples are added in the same order however they are submitted.
+    fn samples_per_submission(&self, p: &Progress, pixels: u64) -> u32 {
+        if self.loop_limited {
+            return 1;
+        }
+        let least = self.settings.samples_per_submit / pixels;
+        let timed = (p.rate * SUBMIT_SECONDS) as u64 / pixels;
+        least.max(timed).clamp(1, u64::from(film::FILM_BLOCK)) as u32
     }
 
     /// A complete block leaves the device: exact sums if the job owns all of it, else kept whole
@@ -715,6 +755,9 @@ pub struct SeedOutput {
     pub done: u32,
     pub wall: f64,
     pub device: f64,
+    /// Of `wall`, the seconds spent moving complete blocks off the device.
+    pub commit: f64,
+    pub submissions: u64,
     pub interrupted: bool,
     pub sums: film::FilmSums,
     pub passes: Vec<super::PassReport>,

@@ -76,7 +76,10 @@ pub trait IntegratorPasses {
         Ok(count)
     }
     /// Records what adds samples [first_sample, first_sample + sample_count) of the pixels in
-    /// `pass.tile` to the film (dispatches and the barriers between them).
+    /// `pass.tile` to the film (dispatches and the barriers between them). The driver records
+    /// the tiles of the same samples one after the other into one command buffer with no barrier
+    /// between them, so that the device may run them at once: what one tile's dispatches write
+    /// must be its own pixels' film and AOVs only.
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants);
     /// Figures about the last render for headers and summaries: (name, value).
     fn report(&self) -> Vec<(String, String)> {

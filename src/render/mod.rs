@@ -66,6 +66,11 @@ pub struct RenderStats {
     /// Wall time of the passes (steady-state rendering; evaluation excluded).
     pub render_seconds: f64,
     pub device_seconds: f64,
+    /// Of `render_seconds`, the wall time spent moving complete film blocks off the device and
+    /// adding them up exactly.
+    pub commit_seconds: f64,
+    /// Submissions of passes to the queue (each one recorded, submitted and waited for).
+    pub submissions: u64,
     pub total_seconds: f64,
     pub spp: u32,
     /// Camera samples of the image, over all its pixels (with adaptive sampling fewer than
@@ -101,6 +106,8 @@ impl RenderStats {
             build: prepared.build.clone(),
             render_seconds: o.wall,
             device_seconds: o.device,
+            commit_seconds: o.commit,
+            submissions: o.submissions,
             spp: o.done,
             camera_samples: r.counts.iter().map(|&c| u64::from(c)).sum(),
             non_finite_samples: r.non_finite_samples,

@@ -18,8 +18,9 @@ pub struct RenderSettings {
     pub time: Option<f64>,
     pub seed: u64,
     pub trace: TraceMode,
-    /// Upper bound on camera samples (pixels × samples) in one submission, so that no dispatch
-    /// runs long enough to trip a desktop driver's watchdog.
+    /// Camera samples (pixels × samples) one submission takes at least; more once the device's
+    /// rate is measured, up to what it renders in `driver::SUBMIT_SECONDS` (then a submission is
+    /// short enough for any driver's watchdog, and its fixed costs stay small on a fast device).
     pub samples_per_submit: u64,
     /// Reference image (row-major RGB, the camera's resolution) to measure each pass against.
     pub reference: Option<Vec<[f32; 3]>>,
@@ -114,6 +115,16 @@ impl RenderSettings {
     }
 }
 
+/// 2^20 camera samples a submission, or ILLUM_SAMPLES_PER_SUBMIT (a measurement knob: how a
+/// GPU's throughput depends on the work per submission, docs/performance-gpu.md).
+fn samples_per_submit() -> u64 {
+    std::env::var("ILLUM_SAMPLES_PER_SUBMIT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or(1 << 20)
+}
+
 impl RenderSettings {
     /// The driver's defaults (16 spp, seed 0, any trace path) for `integrator`; the integrators'
     /// table provides `Default`, with the default integrator.
@@ -124,7 +135,7 @@ impl RenderSettings {
             time: None,
             seed: 0,
             trace: TraceMode::Auto,
-            samples_per_submit: 1 << 20,
+            samples_per_submit: samples_per_submit(),
             reference: None,
             evaluate_passes: false,
             clamp: None,
