@@ -17,10 +17,15 @@
 # figures) to check the script before device time is spent. STAGES picks stages (default: all but
 # tests); "tests" runs the integration tests built here (.dev/tests.tar.xz: tests/<name>, stripped
 # `cargo test --release --no-run` binaries) on the GPU. CMP_SCENES and CMP_SETS (compare-mitsuba.py
-# --set arguments, e.g. --set default= --set "1/1=--light-samples 1") change the comparison.
+# --set arguments, e.g. --set default= --set "1/1=--light-samples 1"), CMP_MI (--mi-settings), CMP_T
+# (seconds), CMP_REF, CMP_ROUNDS and CMP_TIMEOUT change the comparison.
 set -u
 smoke=${SMOKE:-}
 stages=" ${STAGES:-devices first validation trace throughput where compare} "
+# Also: stats (each kernel's register count and other driver statistics, ILLUM_KERNEL_STATS=1),
+# submit (camera samples/s and kernel time against the samples of one submission), fps (1280x720
+# frames of one sample each, the interactive view's unit of work), ab (this build against
+# .dev/illum-before.xz, another stripped build, alternately on the same scenes).
 want() { [[ $stages == *" $1 "* ]]; }
 out=${OUT:-/tmp/device-check}
 mkdir -p "$out"
@@ -44,7 +49,7 @@ tar -xJf .dev/layers.tar.xz -C "$dev"
 I=$dev/illum
 scenes="scenes/bench/mitsuba-dome.json scenes/bench/mitsuba-rect.json scenes/bench/mitsuba-veach.json
     scenes/bench/mitsuba-lights64.json"
-rays=4194304 big="--width 1280 --height 960" t=1 ref=20 variant=cuda_ad_rgb
+rays=4194304 big="--width 1280 --height 960" t=${CMP_T:-1} ref=20 variant=cuda_ad_rgb
 if [ -n "$smoke" ]; then
     scenes=scenes/bench/mitsuba-rect.json rays=65536 big="--width 160 --height 120" t=0.3 ref=1
     variant=llvm_ad_rgb
@@ -109,6 +114,49 @@ for o in "" "--light-samples 1 --brdf-samples 1" "--technique light --light-samp
 done
 }
 
+want stats && {
+stage "kernel statistics (VK_KHR_pipeline_executable_properties): direct, full, path"
+for o in "scenes/bench/mitsuba-dome.json" "" "scenes/interior.json --integrator path"; do
+    echo "render ${o:-default scene}"
+    ILLUM_KERNEL_STATS=1 timeout 60 "$I" render $o --width 64 --height 48 --spp 1 \
+        -o "$dev/stats.exr" 2>&1 | grep -E "statistics|rror"
+done
+}
+
+want submit && {
+stage "camera samples/s against samples per submission: the dome and the default scene at $big"
+for s in scenes/bench/mitsuba-dome.json ""; do
+    for n in 1048576 16777216 268435456; do
+        echo "${s:-default scene}, ILLUM_SAMPLES_PER_SUBMIT=$n"
+        ILLUM_SAMPLES_PER_SUBMIT=$n timeout 40 "$I" render $s $big --time 3 --spp 1000000 \
+            -o "$dev/big.exr" 2>&1 | grep -E "spp in|rror"
+    done
+done
+}
+
+want fps && {
+stage "frames of one sample at 1280x720 (the view's unit of work): default scene, direct and full"
+for i in direct full; do
+    for n in 262144 1048576; do
+        echo "integrator $i, ILLUM_SAMPLES_PER_SUBMIT=$n"
+        ILLUM_SAMPLES_PER_SUBMIT=$n timeout 40 "$I" render --width 1280 --height 720 \
+            --integrator $i --time 3 --spp 100000 -o "$dev/fps.exr" 2>&1 | grep -E "spp in|rror"
+    done
+done
+}
+
+want ab && {
+stage "before and after: .dev/illum-before.xz against this build, alternately, 3 s each at $big"
+xz -dc .dev/illum-before.xz >"$dev/illum-before" && chmod +x "$dev/illum-before"
+for o in "scenes/bench/mitsuba-dome.json" "" "--integrator direct" "scenes/interior.json --integrator path"; do
+    for b in "$dev/illum-before" "$I" "$dev/illum-before" "$I"; do
+        echo "$(basename "$b"): ${o:-default scene}"
+        timeout 40 "$b" render $o $big --time 3 --spp 1000000 -o "$dev/ab.exr" 2>&1 |
+            grep -E "spp in|rror"
+    done
+done
+}
+
 want tests && {
 stage "integration tests on this GPU (validation layers on; the trace path it offers)"
 tar -xJf .dev/tests.tar.xz -C "$dev"
@@ -128,9 +176,9 @@ if [ -z "$smoke" ]; then
     export PYTHONPATH=$dev/site
 fi
 eval "sets=(${CMP_SETS:-})"
-PYTHONUNBUFFERED=1 timeout 330 python3 scripts/compare-mitsuba.py ${CMP_SCENES:-$scenes} \
+PYTHONUNBUFFERED=1 timeout ${CMP_TIMEOUT:-330} python3 scripts/compare-mitsuba.py ${CMP_SCENES:-$scenes} \
     --variant $variant --time $t --ref-time ${CMP_REF:-$ref} --rounds ${CMP_ROUNDS:-3} --illum "$I" \
-    --out "$dev/cmp" "${sets[@]}"
+    --out "$dev/cmp" ${CMP_MI:+--mi-settings "$CMP_MI"} "${sets[@]}"
 echo "rc $?"
 }
 stage done
