@@ -248,11 +248,14 @@ fn device_aov_planes_are_read_back_and_cleared_with_the_film() {
     let usage = U::STORAGE_BUFFER | U::TRANSFER_SRC | U::TRANSFER_DST;
     let film_buf = ctx.upload("film", &film_data, usage).unwrap();
     let aov_buf = ctx.upload("aovs", &aov_data, usage).unwrap();
+    // Reads through a kept host buffer, as a render's are: a later read sees the new data.
+    let kept = std::sync::Mutex::new(None);
     let device = film::DeviceFilm {
         film: &film_buf,
         aovs: Some(&aov_buf),
         aov_planes: p,
         window: covered,
+        readback: Some(&kept),
     };
     let window = Window {
         x0: 3,
@@ -276,8 +279,18 @@ fn device_aov_planes_are_read_back_and_cleared_with_the_film() {
             i += 1;
         }
     }
-    film::clear(&ctx, device).unwrap();
+    // A block's commit adds exactly what download_window reads (to sums that hold something
+    // already), then clears the device film.
+    let whole = film::download_window(&ctx, device, covered).unwrap();
+    let mut sums = film::FilmSums::new(covered, vec!["A".into(), "B".into(), "C".into()]);
+    let mut expected = film::FilmSums::new(covered, sums.aov_planes.clone());
+    sums.add_block(&whole);
+    expected.add_block(&whole);
+    expected.add_block(&whole);
+    film::commit_block(&ctx, device, &mut sums).unwrap();
+    assert_eq!(sums.sums, expected.sums);
     let cleared = film::download_window(&ctx, device, covered).unwrap();
     assert!(cleared.iter().all(|&x| x == 0.0));
+    film::clear(&ctx, device).unwrap();
     assert_no_validation_messages(&ctx);
 }

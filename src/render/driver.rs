@@ -191,6 +191,8 @@ pub struct FilmBuffers {
     pub planes: usize,
     /// The image pixels it covers.
     pub window: Window,
+    /// The host buffer block reads land in (made at the first).
+    readback: std::sync::Mutex<Option<Buffer>>,
 }
 
 impl FilmBuffers {
@@ -225,6 +227,7 @@ impl FilmBuffers {
             aovs,
             planes,
             window,
+            readback: Default::default(),
         })
     }
 
@@ -234,6 +237,7 @@ impl FilmBuffers {
             aovs: self.aovs.as_ref(),
             aov_planes: self.planes,
             window: self.window,
+            readback: Some(&self.readback),
         }
     }
 }
@@ -700,16 +704,15 @@ impl Blocking<'_> {
     /// A complete block leaves the device: exact sums if the job owns all of it, else kept whole
     /// as a boundary block.
     fn commit_block(&self, p: &mut Progress, start: u32, end: u32) -> Result<()> {
-        let block = film::download_window(self.ctx, self.film.device(), self.window)?;
         if start >= self.range.0 && end <= self.range.1 {
-            p.sums.add_block(&block);
-        } else {
-            p.sums.boundary.push(film::BoundaryBlock {
-                start,
-                end,
-                sums: block,
-            });
+            return film::commit_block(self.ctx, self.film.device(), &mut p.sums);
         }
+        let block = film::download_window(self.ctx, self.film.device(), self.window)?;
+        p.sums.boundary.push(film::BoundaryBlock {
+            start,
+            end,
+            sums: block,
+        });
         film::clear(self.ctx, self.film.device())
     }
 
