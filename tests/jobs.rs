@@ -235,6 +235,33 @@ fn the_command_line_splits_and_merges_exactly() {
         err.contains("cli-a.exr") && err.contains("illum.samples"),
         "{err}"
     );
+    // Parts a and b both rendered block 0..256 whole; a copy of b whose block differs at one
+    // pixel and channel is refused, naming both files (the merge checks every shared block).
+    let (info, mut sums) =
+        illum::jobs::partial::read_partial(std::path::Path::new(&parts[1].0)).unwrap();
+    let block = sums
+        .boundary
+        .iter_mut()
+        .find(|b| b.start == 0)
+        .expect("b shares block 0..256");
+    block.sums[5 * illum::film::channels(0) + 1] += 1.0;
+    let tampered = path("cli-b-tampered.exr");
+    illum::jobs::partial::write_partial(std::path::Path::new(&tampered), &info, &sums).unwrap();
+    let (code, err) = illum_cli(&[
+        "merge",
+        "-o",
+        &path("cli-bad.exr"),
+        &parts[0].0,
+        &tampered,
+        &parts[2].0,
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("cli-b-tampered.exr")
+            && err.contains("cli-a.exr")
+            && err.contains("samples 0..256 differ"),
+        "{err}"
+    );
 }
 
 /// An interrupted job has no part to write: its sums may hold part of a block it does not own.

@@ -496,13 +496,16 @@ pub fn commit_block(ctx: &Context, film: DeviceFilm, sums: &mut FilmSums) -> Res
 }
 
 /// Threads for host work over `pixels` pixels: the machine's cores, at most 8, none for fewer
-/// than 16384 pixels a thread.
+/// than 16384 pixels a thread (a merge adds boundary blocks a pixel at a time: it never asks
+/// the system).
 fn worker_threads(pixels: usize) -> usize {
-    std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(8)
-        .min(pixels / 16384)
-        .max(1)
+    const PIXELS_A_THREAD: usize = 16384;
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    if pixels < 2 * PIXELS_A_THREAD {
+        return 1;
+    }
+    let cores = *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    cores.min(8).min(pixels / PIXELS_A_THREAD).max(1)
 }
 
 /// Records zeroing the device film and its AOV planes.

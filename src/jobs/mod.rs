@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::film::{self, Film, FilmSums, Window};
 use crate::render::{RenderOutput, RenderSettings};
 use crate::scene::Scene;
-use partial::PartInfo;
+use partial::{PartData, PartInfo};
 use std::path::{Path, PathBuf};
 
 /// Every setting that changes a render's samples, as text: jobs of one image must agree on it.
@@ -279,8 +279,9 @@ struct Accumulator {
     /// Frame pixels, row-major, `channels` values each.
     channels: usize,
     sums: Vec<i128>,
-    /// Per pixel: the boundary blocks added so far (start, hash of the copy added, its part).
-    seen: Vec<Vec<(u32, u64, usize)>>,
+    /// Per boundary block (by its first sample) and frame pixel: the hash of the copy added and
+    /// its part + 1 (0: none added yet). One flat table a block, made when a part first has it.
+    seen: std::collections::HashMap<u32, Vec<(u64, u32)>>,
 }
 
 impl Accumulator {
@@ -293,7 +294,7 @@ impl Accumulator {
             aov_planes,
             channels,
             sums: crate::film::zeroed_sums(n * channels),
-            seen: vec![Vec::new(); n],
+            seen: Default::default(),
         }
     }
 
@@ -326,35 +327,89 @@ impl Accumulator {
                 *a = a.saturating_add(*x);
             }
         }
-        let pixel = |i: usize| {
-            let (x, y) = (
-                win.x0 + i as u32 % win.width(),
-                win.y0 + i as u32 / win.width(),
-            );
-            y as usize * w + x as usize
-        };
         for b in &sums.boundary {
             for (i, v) in b.sums.chunks_exact(c).enumerate() {
-                let px = pixel(i);
-                let hash = pixel_hash(v);
-                if let Some(&(_, h, q)) = self.seen[px].iter().find(|s| s.0 == b.start) {
-                    if h != hash {
-                        return Err(part_error(
-                            &headers[index].path,
-                            "block",
-                            format!(
-                                "its samples {}..{} differ from those of {}",
-                                b.start,
-                                b.end,
-                                headers[q].path.display()
-                            ),
-                        ));
-                    }
-                    continue;
+                self.add_boundary(headers, index, (b.start, b.end), i, v)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds part `index`'s data as read from its file, pixel by pixel from its channels (the
+    /// part is never joined into pixels first: a merge holds the frame's sums and one part's
+    /// decoded channels).
+    fn add_data(&mut self, headers: &[PartHeader], index: usize, data: &PartData) -> Result<()> {
+        let info = &headers[index].info;
+        let win = info.window;
+        let c = self.channels;
+        if data.channels() != c || data.pixels != win.pixels() {
+            return Err(part_error(
+                &headers[index].path,
+                "illum.aovPlanes, illum.crop",
+                "its sums do not match its header".into(),
+            ));
+        }
+        for i in 0..data.pixels {
+            let px = self.frame_pixel(win, i);
+            for (k, a) in self.sums[px * c..(px + 1) * c].iter_mut().enumerate() {
+                *a = a.saturating_add(data.sum(i, k));
+            }
+        }
+        let mut v = vec![0.0f32; c];
+        for (start, end, channels) in &data.boundary {
+            for i in 0..data.pixels {
+                for (x, ch) in v.iter_mut().zip(channels) {
+                    *x = ch[i];
                 }
-                self.seen[px].push((b.start, hash, index));
+                self.add_boundary(headers, index, (*start, *end), i, &v)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The frame pixel of pixel `i` (row-major) of window `win`.
+    fn frame_pixel(&self, win: Window, i: usize) -> usize {
+        let (x, y) = (
+            win.x0 as usize + i % win.width() as usize,
+            win.y0 as usize + i / win.width() as usize,
+        );
+        y * self.width as usize + x
+    }
+
+    /// Adds pixel `i`'s sums `v` of a boundary block of part `index` unless another part's copy
+    /// was added, which it must then equal.
+    fn add_boundary(
+        &mut self,
+        headers: &[PartHeader],
+        index: usize,
+        (start, end): (u32, u32),
+        i: usize,
+        v: &[f32],
+    ) -> Result<()> {
+        let c = self.channels;
+        let px = self.frame_pixel(headers[index].info.window, i);
+        let pixels = self.width as usize * self.height as usize;
+        let seen = self
+            .seen
+            .entry(start)
+            .or_insert_with(|| vec![(0, 0); pixels]);
+        let hash = pixel_hash(v);
+        match seen[px] {
+            (_, 0) => {
+                seen[px] = (hash, index as u32 + 1);
                 film::add_block(&mut self.sums[px * c..(px + 1) * c], v, c);
             }
+            (h, q) if h != hash => {
+                return Err(part_error(
+                    &headers[index].path,
+                    "block",
+                    format!(
+                        "its samples {start}..{end} differ from those of {}",
+                        headers[q as usize - 1].path.display()
+                    ),
+                ));
+            }
+            _ => {}
         }
         Ok(())
     }
@@ -411,11 +466,11 @@ pub fn merge_files(paths: &[PathBuf]) -> Result<Merged> {
     check(&headers)?;
     let mut acc = Accumulator::for_parts(&headers);
     for (k, path) in paths.iter().enumerate() {
-        let (info, sums) = crate::jobs::partial::read_partial(path)?;
+        let (info, data) = crate::jobs::partial::read_partial_data(path)?;
         if info != headers[k].info {
             return Err(part_error(path, "header", "changed while merging".into()));
         }
-        acc.add(&headers, k, &sums)?;
+        acc.add_data(&headers, k, &data)?;
     }
     Ok(acc.finish(&headers))
 }

@@ -301,6 +301,68 @@ fn check_declared_size(path: &Path) -> Res<()> {
 
 /// Reads a partial EXR written by [`write_partial`].
 pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
+    let (info, data) = read_partial_data(path)?;
+    let sums = data.film_sums(info.window, &info.aov_planes);
+    Ok((info, sums))
+}
+
+/// A partial EXR's sums as decoded: each channel's four 32-bit words and each boundary block's
+/// float32 channels, not yet joined into pixels (a merge adds them to the frame from here, so
+/// that it never holds a part twice).
+pub struct PartData {
+    /// Pixels of the part's window.
+    pub pixels: usize,
+    /// Per film channel (FilmPixel's, then each AOV plane's), its words w0..w3.
+    words: Vec<[Vec<u32>; 4]>,
+    /// Per boundary block: its sample range and its float32 sums, a vector per channel.
+    pub boundary: Vec<(u32, u32, Vec<Vec<f32>>)>,
+}
+
+impl PartData {
+    /// Channels a pixel.
+    pub fn channels(&self) -> usize {
+        self.words.len()
+    }
+
+    /// The fixed-point sum of channel `c` at pixel `i` of the window.
+    #[inline]
+    pub fn sum(&self, i: usize, c: usize) -> i128 {
+        let [w0, w1, w2, w3] = &self.words[c];
+        (u128::from(w0[i])
+            | u128::from(w1[i]) << 32
+            | u128::from(w2[i]) << 64
+            | u128::from(w3[i]) << 96) as i128
+    }
+
+    /// The data as film sums of `window` (pixels interleaved).
+    pub fn film_sums(&self, window: Window, aov_planes: &[String]) -> FilmSums {
+        let stride = self.channels();
+        let mut sums = FilmSums::new(window, aov_planes.to_vec());
+        for (i, p) in sums.sums.chunks_exact_mut(stride).enumerate() {
+            for (c, v) in p.iter_mut().enumerate() {
+                *v = self.sum(i, c);
+            }
+        }
+        for (start, end, channels) in &self.boundary {
+            let mut block = BoundaryBlock {
+                start: *start,
+                end: *end,
+                sums: vec![0.0; self.pixels * stride],
+            };
+            for (c, v) in channels.iter().enumerate() {
+                for (p, &x) in block.sums[c..].iter_mut().step_by(stride).zip(v) {
+                    *p = x;
+                }
+            }
+            sums.boundary.push(block);
+        }
+        sums
+    }
+}
+
+/// Reads a partial EXR's header and data without joining its channels ([`read_partial`] is
+/// this, joined).
+pub fn read_partial_data(path: &Path) -> Res<(PartInfo, PartData)> {
     let bad = |reason: String| unsupported(path, reason);
     check_declared_size(path)?;
     let image = read()
@@ -314,7 +376,7 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
             path: path.to_path_buf(),
             cause,
         })?;
-    let layer = image
+    let mut layer = image
         .layer_data
         .into_iter()
         .next()
@@ -328,34 +390,25 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
         }
     };
     let n = window.pixels();
-    let channel = |name: &str| {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name == *name)
-            .map(|c| &c.sample_data)
-    };
+    // The decoded channels by name, each taken (moved, not copied) once.
+    let mut decoded: std::collections::HashMap<String, FlatSamples> =
+        std::mem::take(&mut layer.channel_data.list)
+            .into_iter()
+            .map(|c| (c.name.to_string(), c.sample_data))
+            .collect();
     let names = channel_names(&info.aov_planes);
-    let stride = names.len();
-    let mut sums = FilmSums::new(window, info.aov_planes.clone());
-    for (c, plane) in names.iter().enumerate() {
-        let word = |k: usize| {
+    let mut words = Vec::with_capacity(names.len());
+    for plane in &names {
+        let mut word = |k: usize| {
             let name = format!("sum.{plane}.w{k}");
-            match channel(&name) {
+            match decoded.remove(&name) {
                 Some(FlatSamples::U32(v)) if v.len() == n => Ok(v),
                 _ => Err(bad(format!("missing UINT channel {name}"))),
             }
         };
-        let (w0, w1, w2, w3) = (word(0)?, word(1)?, word(2)?, word(3)?);
-        // One pass per channel: the sums are strided, the words are not.
-        for (i, p) in sums.sums[c..].iter_mut().step_by(stride).enumerate() {
-            *p = (u128::from(w0[i])
-                | u128::from(w1[i]) << 32
-                | u128::from(w2[i]) << 64
-                | u128::from(w3[i]) << 96) as i128;
-        }
+        words.push([word(0)?, word(1)?, word(2)?, word(3)?]);
     }
+    let mut boundary = Vec::new();
     for k in 0..2 {
         // No attribute: the job has no such block; a malformed one is an error, not a skip.
         let name = format!("illum.block{k}");
@@ -363,21 +416,22 @@ pub fn read_partial(path: &Path) -> Res<(PartInfo, FilmSums)> {
             continue;
         };
         let range = range_text(&v).ok_or_else(|| bad(format!("{name} = {v:?} is not A..B")))?;
-        let mut block = BoundaryBlock {
-            start: range.0,
-            end: range.1,
-            sums: vec![0.0; n * stride],
-        };
-        for (c, plane) in names.iter().enumerate() {
+        let mut channels = Vec::with_capacity(names.len());
+        for plane in &names {
             let name = format!("block{k}.{plane}");
-            let Some(FlatSamples::F32(v)) = channel(&name) else {
-                return Err(bad(format!("missing FLOAT channel {name}")));
-            };
-            for (p, &x) in block.sums[c..].iter_mut().step_by(stride).zip(v) {
-                *p = x;
+            match decoded.remove(&name) {
+                Some(FlatSamples::F32(v)) if v.len() == n => channels.push(v),
+                _ => return Err(bad(format!("missing FLOAT channel {name}"))),
             }
         }
-        sums.boundary.push(block);
+        boundary.push((range.0, range.1, channels));
     }
-    Ok((info, sums))
+    Ok((
+        info,
+        PartData {
+            pixels: n,
+            words,
+            boundary,
+        },
+    ))
 }
