@@ -143,6 +143,9 @@ struct State {
     update_seconds: f64,
     /// Of it, the warm-up's: what holds back the first sample.
     warmup_seconds: f64,
+    /// Of it: the update dispatches (submitted and waited for), the host's averaging of their
+    /// records, and building and uploading the tables.
+    split_seconds: [f64; 3],
 }
 
 pub struct RadiosityCache {
@@ -203,6 +206,7 @@ impl RadiosityCache {
                 update_paths: 0,
                 update_seconds: 0.0,
                 warmup_seconds: 0.0,
+                split_seconds: [0.0; 3],
             }),
         })
     }
@@ -280,6 +284,7 @@ impl RadiosityCache {
         st.evicted = 0;
         st.update_paths = 0;
         st.update_seconds = 0.0;
+        st.split_seconds = [0.0; 3];
         let t0 = Instant::now();
         self.publish(ctx, st)?; // the empty table
         let rounds = WARMUP_PATHS
@@ -323,6 +328,7 @@ impl RadiosityCache {
         };
         // One invocation per block (x, y) and update index (z), in film-kernel workgroups.
         let [gx, gy, _] = tile_groups([0, 0, s.blocks[0], s.blocks[1]]);
+        let dispatched = Instant::now();
         ctx.one_shot(|cmd| {
             kernel.dispatch(cmd, bytemuck::bytes_of(&pc), [gx, gy, rounds]);
             // SAFETY: recording into the command buffer one_shot owns.
@@ -340,6 +346,8 @@ impl RadiosityCache {
                 )
             };
         })?;
+        let gathered = Instant::now();
+        st.split_seconds[0] += (gathered - dispatched).as_secs_f64();
         st.update_paths += u64::from(s.paths) * u64::from(rounds);
         let n = (s.paths * VERTICES * rounds) as usize;
         let State {
@@ -363,11 +371,13 @@ impl RadiosityCache {
                 sum.count += 1;
             }
         }
+        st.split_seconds[1] += gathered.elapsed().as_secs_f64();
         Ok(())
     }
 
     /// Makes the gathered generation the table the kernels read.
     fn publish(&self, ctx: &Context, st: &mut State) -> Result<()> {
+        let t0 = Instant::now();
         st.generation += 1;
         let generation = st.generation;
         let current = std::mem::take(&mut st.current);
@@ -445,6 +455,7 @@ impl RadiosityCache {
                 )
             };
         })?;
+        st.split_seconds[2] += t0.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -478,8 +489,15 @@ impl RadiosityCache {
             (
                 "radiosityUpdates".into(),
                 format!(
-                    "{} paths of {VERTICES} vertices in {:.3} s ({:.3} s of warm-up before the first sample)",
-                    st.update_paths, st.update_seconds, st.warmup_seconds
+                    "{} paths of {VERTICES} vertices in {:.3} s ({:.3} s of warm-up before the first \
+                     sample; {:.3} s in update dispatches, {:.3} s averaging their records, {:.3} s \
+                     building and uploading tables)",
+                    st.update_paths,
+                    st.update_seconds,
+                    st.warmup_seconds,
+                    st.split_seconds[0],
+                    st.split_seconds[1],
+                    st.split_seconds[2]
                 ),
             ),
             (
