@@ -245,6 +245,11 @@ struct Frame {
                               // dispatches of PassConstants.order take in prefixes (film_pixel)
     uint film_y0;             // width (film_slot; a render holds the film of its job's pixels only)
     uint film_width;
+    uint light_floor;         // fewest samples a looped light takes (light_count_for; 0 or 1: the
+                              // course's rule alone)
+    uint frame_pad0;          // std430 sizes structs with a vec4 in 16-byte steps
+    uint frame_pad1;
+    uint frame_pad2;
 };
 
 // Per-dispatch constants.

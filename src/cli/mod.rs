@@ -182,6 +182,12 @@ pub struct IntegratorArgs {
     /// BRDF samples per lobe; 1 to 64. [default: 2]
     #[arg(long, value_name = "N")]
     pub brdf_samples: Option<u32>,
+    /// direct: how the light, BRDF and dome sample counts are chosen: auto (a pilot renders a
+    /// small image under candidate counts and keeps the one with the least error × rays,
+    /// docs/allocation.md) or fixed (the counts given, the course's rule). [default: auto,
+    /// fixed when --light-samples or --brdf-samples is given]
+    #[arg(long, value_name = "MODE", value_parser = ["auto", "fixed"])]
+    pub allocation: Option<String>,
     /// Diffuse lobe also by cosine-sampled BRDF samples, combined by MIS (off: light samples only,
     /// as in the course); `--diffuse-mis` alone is on, `--diffuse-mis=off` off. [default: off]
     #[arg(long, value_name = "MODE", num_args = 0..=1, require_equals = true, default_missing_value = "on", value_parser = ["on", "off"])]
@@ -234,8 +240,9 @@ impl IntegratorArgs {
     /// or none), then these options over them.
     pub fn params(&self, name: &str, scene: &Scene) -> Result<Params> {
         let mut p = crate::integrators::scene_params(name, scene);
-        let options: [(&str, Option<String>); 10] = [
+        let options: [(&str, Option<String>); 11] = [
             ("light_samples", self.light_samples.map(|v| v.to_string())),
+            ("allocation", self.allocation.clone()),
             ("brdf_samples", self.brdf_samples.map(|v| v.to_string())),
             ("diffuse_mis", self.diffuse_mis.clone()),
             ("max_depth", self.max_depth.map(|v| v.to_string())),

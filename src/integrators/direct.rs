@@ -5,6 +5,7 @@
 
 use crate::error::Result;
 use crate::layout::*;
+use crate::render::allocation::AllocationMode;
 use crate::render::film_kernel::{bind_film, dispatch_tile, film_pipeline};
 use crate::render::{Integrator, IntegratorPasses, Params, PreparedScene};
 use crate::shaders;
@@ -147,6 +148,10 @@ pub struct DirectLighting {
     pub shadow_cull: f32,
     /// Control variates for diffuse light samples (off: none).
     pub control_variates: ControlVariates,
+    /// Whether the counts above are used as given (fixed, the default of a value built in code,
+    /// which names its counts) or are where an allocation pilot starts (auto: the `direct`
+    /// integrator's default when its parameters are parsed; src/render/allocation.rs).
+    pub allocation: AllocationMode,
 }
 
 impl Default for DirectLighting {
@@ -161,6 +166,7 @@ impl Default for DirectLighting {
             shadow_resample: 1.0,
             shadow_cull: 0.0,
             control_variates: ControlVariates::Off,
+            allocation: AllocationMode::Fixed,
         }
     }
 }
@@ -192,6 +198,7 @@ impl DirectLighting {
             shadow_resample: p.get("shadow_resample", d.shadow_resample)?,
             shadow_cull: p.get("shadow_cull", d.shadow_cull)?,
             control_variates: p.get("control_variates", d.control_variates)?,
+            allocation: d.allocation,
         };
         it.check()?;
         Ok(it)
@@ -283,7 +290,7 @@ impl DirectLighting {
     /// Its part of an integrator's identity, after the integrator's own parameters.
     pub fn identity(&self, integrator: &str, own: &str) -> String {
         format!(
-            "integrator={integrator} {own}technique={} light_samples={} brdf_samples={} diffuse_mis={} dome_samples={} lights={} shadow_resample={} shadow_cull={} control_variates={}",
+            "integrator={integrator} {own}technique={} light_samples={} brdf_samples={} diffuse_mis={} dome_samples={} lights={} shadow_resample={} shadow_cull={} control_variates={} allocation={}",
             self.technique.name(),
             self.light_samples,
             self.brdf_samples,
@@ -293,6 +300,7 @@ impl DirectLighting {
             self.shadow_resample,
             self.shadow_cull,
             self.control_variates.name(),
+            self.allocation.name(),
         )
     }
 
@@ -310,6 +318,7 @@ impl DirectLighting {
                 "controlVariates".into(),
                 self.control_variates.name().into(),
             ),
+            ("allocationMode".into(), self.allocation.name().into()),
         ]
     }
 }
@@ -319,10 +328,33 @@ impl DirectLighting {
 pub struct Direct(pub DirectLighting);
 
 impl Direct {
+    /// Its parameters beyond the direct-lighting ones every integrator shares.
+    pub const PARAMS: &[&str] = &["allocation"];
+
+    /// Its parameters from `p`. The allocation is measured (auto) unless `p` says fixed, or
+    /// names a sample count without saying auto: counts given are counts meant.
     pub fn parse(p: &Params) -> std::result::Result<Direct, String> {
-        let d = Direct(DirectLighting::parse(p)?);
-        p.finish("direct", DirectLighting::PARAMS)?;
+        let mut d = Direct(DirectLighting::parse(p)?);
+        let counts_given = ["light_samples", "brdf_samples", "dome_samples"]
+            .iter()
+            .any(|n| p.has(n));
+        let default = if counts_given {
+            AllocationMode::Fixed
+        } else {
+            AllocationMode::Auto
+        };
+        d.0.allocation = p.get("allocation", default)?;
+        p.finish("direct", &[Direct::PARAMS, DirectLighting::PARAMS].concat())?;
         Ok(d)
+    }
+
+    /// The default parameters with the allocation measured: what `direct` renders unless told
+    /// otherwise.
+    pub fn measured() -> Direct {
+        Direct(DirectLighting {
+            allocation: AllocationMode::Auto,
+            ..DirectLighting::default()
+        })
     }
 }
 
@@ -361,6 +393,10 @@ impl Integrator for Direct {
 
     fn as_any(&self) -> &dyn std::any::Any {
         self
+    }
+
+    fn measured_allocation(&self) -> bool {
+        self.0.allocation == AllocationMode::Auto
     }
 }
 

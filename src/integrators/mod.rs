@@ -88,7 +88,7 @@ pub fn scene_params(name: &str, scene: &crate::scene::Scene) -> Params {
 
 /// The default integrator with its default parameters.
 pub fn default_integrator() -> Arc<dyn Integrator> {
-    Arc::new(Direct::default())
+    Arc::new(Direct::measured())
 }
 
 impl Default for RenderSettings {

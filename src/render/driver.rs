@@ -141,6 +141,9 @@ impl Setup {
         let mut f = gpu.frame;
         crate::gpu_scene::set_camera(&mut f, camera, gpu.origin);
         self.integrator.configure(&mut f);
+        if let Some(a) = &settings.allocation {
+            a.counts.apply(&mut f);
+        }
         f.clamp_luminance = settings.clamp.unwrap_or(0.0);
         f.nan_every = settings.inject_non_finite;
         let w = self.film_window;
@@ -307,6 +310,9 @@ pub struct Blocking<'a> {
     pub adaptive: Option<(&'a Buffer, &'a Buffer, Window)>,
     /// The image's height.
     pub height: u32,
+    /// Wall seconds spent for the render before its first seed (the allocation pilot): the
+    /// first seed's [`Blocking::start`] counts them as rendering, under its time budget too.
+    pub head_start: std::cell::Cell<f64>,
 }
 
 /// Where one seed's render stands: what [`Blocking::render_seed`] runs to the end, and what an
@@ -413,7 +419,7 @@ impl Blocking<'_> {
             budget: last - first,
             evaluate: self.settings.evaluate_passes || self.settings.reference.is_some(),
             done: 0,
-            wall: 0.0,
+            wall: self.head_start.take(),
             device: 0.0,
             commit: 0.0,
             submissions: 0,

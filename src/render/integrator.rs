@@ -45,6 +45,11 @@ pub trait Integrator: Send + Sync + std::fmt::Debug {
     fn header(&self) -> Vec<(String, String)>;
     /// Itself, for its kernels to read its parameters.
     fn as_any(&self) -> &dyn std::any::Any;
+    /// Whether its direct-lighting counts are to be measured by a pilot before it renders
+    /// (src/render/allocation.rs), starting from the counts its `configure` writes.
+    fn measured_allocation(&self) -> bool {
+        false
+    }
 }
 
 /// An integrator's kernels. A prepared scene keeps them between renders; each render configures

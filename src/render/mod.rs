@@ -7,6 +7,7 @@
 //! even and odd half-buffers (see [`crate::metrics`]).
 
 pub mod adaptive;
+pub mod allocation;
 mod bands;
 mod driver;
 pub mod film_kernel;
@@ -240,6 +241,9 @@ impl Renderer {
         t0: Instant,
     ) -> Result<Vec<RenderOutput>> {
         let ctx = &self.ctx;
+        // The allocation pilot, once for all seeds and bands; its time counts as rendering.
+        let (decided, pilot_seconds) = self.decide_allocation(prepared, camera, settings)?;
+        let settings = &decided;
         if let Some(plan) = bands::plan(settings, camera, seeds.len()) {
             let out = self.render_bands(prepared, camera, settings, plan, progress, t0)?;
             return Ok(vec![out]);
@@ -247,6 +251,7 @@ impl Renderer {
         let run = run::Run::new(self, prepared, camera, settings, seeds.len())?;
         let setup_seconds = t0.elapsed().as_secs_f64();
         let blocking = run.blocking(ctx, settings);
+        blocking.head_start.set(pilot_seconds);
         let (first, last) = blocking.blocks();
         progress(0, last - first);
         let mut outputs = Vec::with_capacity(seeds.len());

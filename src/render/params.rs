@@ -57,6 +57,11 @@ impl Params {
         }
     }
 
+    /// Whether `name` is given (without reading it).
+    pub fn has(&self, name: &str) -> bool {
+        self.values.contains_key(name)
+    }
+
     /// A switch: on/off (true/false also taken).
     pub fn get_switch(&self, name: &str, default: bool) -> Result<bool, String> {
         match self.take(name) {

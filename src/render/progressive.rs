@@ -57,6 +57,7 @@ impl Renderer {
             crop: None,
             ..settings.clone()
         };
+        let (settings, _) = self.decide_allocation(prepared, camera, &settings)?;
         let run = Run::new(self, prepared, camera, &settings, 1)?;
         let progress = run
             .blocking(self.context(), &settings)

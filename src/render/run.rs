@@ -135,6 +135,7 @@ impl Run {
             loop_limited: self.loop_limited,
             adaptive: self.adaptive.as_ref().map(|(e, o, pilot)| (e, o, *pilot)),
             height: self.height,
+            head_start: std::cell::Cell::new(0.0),
         }
     }
 
@@ -174,6 +175,12 @@ impl Run {
         stats.warmup_seconds = self.warmup_seconds;
         stats.setup_seconds = setup_seconds;
         stats.total_seconds = t0.elapsed().as_secs_f64();
+        if let Some(a) = &settings.allocation {
+            stats.integrator.push((
+                "allocation".into(),
+                format!("{} ({})", a.counts.describe(), a.how),
+            ));
+        }
         super::RenderOutput {
             stats,
             film: o.resolved.film,

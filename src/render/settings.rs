@@ -49,6 +49,10 @@ pub struct RenderSettings {
     /// mean spread by the pixels' noise (`spp` is then the most a pixel takes;
     /// src/render/adaptive.rs).
     pub adaptive: Option<super::adaptive::Adaptive>,
+    /// Direct lighting's sample counts as decided (by the allocation pilot,
+    /// src/render/allocation.rs), written over the integrator's; None: the integrator's own, or
+    /// measured first when the integrator asks for that.
+    pub allocation: Option<super::allocation::Allocation>,
 }
 
 impl RenderSettings {
@@ -145,6 +149,7 @@ impl RenderSettings {
             crop: None,
             memory_limit: None,
             adaptive: None,
+            allocation: None,
         }
     }
 }

@@ -1,0 +1,462 @@
+//! The direct-lighting sample allocation, measured on the scene before it renders
+//! (docs/allocation.md): a pilot renders a small image of the same camera under candidate
+//! allocations and keeps the one with the least estimated relMSE × cost, cost in rays per camera
+//! sample plus one (the camera sample's own shading). The candidates move one setting at a time
+//! from the integrator's counts: the floor under small lights (1, the course's share rule, or
+//! N_max), N_max, the BRDF samples per lobe and a textured dome's samples.
+//!
+//! The pilot is deterministic (its own seed, a size that follows the image and the spp, never the
+//! job's range or crop, and costs counted in rays, not seconds), so every job of a split render
+//! decides the same allocation and the jobs merge bit-identically. Its samples are left out of
+//! the image, so the allocation is independent of the image's samples and the image stays
+//! unbiased: every allocation is an unbiased estimator (MIS weights use the counts taken).
+
+use super::{PreparedScene, RenderSettings, Renderer};
+use crate::error::Result;
+use crate::layout::Frame;
+use crate::scene::Camera;
+use std::time::Instant;
+
+/// The pilot's samples per pixel: a power of two, so its half-buffers split evenly.
+pub const PILOT_SPP: u32 = 16;
+/// Most pixels of the pilot's image, and fewest (a smaller one measures too little: the render
+/// keeps the integrator's counts).
+pub const PILOT_PIXELS: u64 = 6912;
+pub const PILOT_MIN_PIXELS: u64 = 1024;
+/// A spp render spends at most 1/PILOT_SHARE of its camera samples on all its candidates.
+pub const PILOT_SHARE: u64 = 16;
+/// Most candidates a pilot renders.
+pub const MAX_CANDIDATES: u64 = 8;
+/// A time-budgeted render gives its pilot this share of the budget: the first candidate, at
+/// PILOT_MIN_PIXELS, measures the rate that sizes the others (none when it alone took a
+/// candidate's share), and the search stops when the share is spent.
+pub const PILOT_TIME_SHARE: f64 = 0.06;
+/// A candidate replaces the best so far only if its estimated cost × relMSE is below this
+/// share of the best's: the pilot's estimates scatter by 3–20% between seeds
+/// (docs/allocation.md), and the integrator's counts stand where the pilot cannot tell.
+pub const MARGIN: f64 = 0.85;
+/// The pilot's seed, the same for every seed of the image: the allocation is a property of the
+/// scene and settings, not of one render's random numbers.
+pub const PILOT_SEED: u64 = 0xA110_CA7E_5EED_0001;
+
+/// How the direct-lighting sample counts are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AllocationMode {
+    /// The integrator's counts as given (the course's rule: each light its share of N_max).
+    #[default]
+    Fixed,
+    /// Measured by a pilot before the render (this module).
+    Auto,
+}
+
+impl AllocationMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            AllocationMode::Fixed => "fixed",
+            AllocationMode::Auto => "auto",
+        }
+    }
+}
+
+impl std::str::FromStr for AllocationMode {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "fixed" => Ok(AllocationMode::Fixed),
+            "auto" => Ok(AllocationMode::Auto),
+            _ => Err(format!("unknown allocation {s:?} (expected auto or fixed)")),
+        }
+    }
+}
+
+/// Direct lighting's sample counts (Frame.light_samples, brdf_samples, dome_samples,
+/// light_floor).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Counts {
+    /// N_max: most light samples per looped light.
+    pub light_samples: u32,
+    /// BRDF samples per lobe.
+    pub brdf_samples: u32,
+    /// A textured dome's samples per N_max.
+    pub dome_samples: u32,
+    /// Fewest samples per looped light (1: the share rule alone).
+    pub light_floor: u32,
+}
+
+impl Counts {
+    /// The counts the frame holds (an integrator has configured it).
+    pub fn of(frame: &Frame) -> Counts {
+        Counts {
+            light_samples: frame.light_samples,
+            brdf_samples: frame.brdf_samples,
+            dome_samples: frame.dome_samples,
+            light_floor: frame.light_floor.max(1),
+        }
+    }
+
+    pub fn apply(&self, frame: &mut Frame) {
+        frame.light_samples = self.light_samples;
+        frame.brdf_samples = self.brdf_samples;
+        frame.dome_samples = self.dome_samples;
+        frame.light_floor = self.light_floor.clamp(1, self.light_samples);
+    }
+
+    pub fn describe(&self) -> String {
+        format!(
+            "light_samples={} light_floor={} brdf_samples={} dome_samples={}",
+            self.light_samples, self.light_floor, self.brdf_samples, self.dome_samples
+        )
+    }
+}
+
+/// What the pilot decided, and how.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Allocation {
+    pub counts: Counts,
+    /// How they were chosen, for the header: deterministic (no times), so that the jobs of a
+    /// split render write the same.
+    pub how: String,
+}
+
+/// One candidate's pilot: estimated relMSE, rays per camera sample, and their product's cost.
+#[derive(Clone, Copy, Debug)]
+struct Measured {
+    relmse: f64,
+    rays: f64,
+}
+
+impl Measured {
+    /// relMSE × time, time as rays per camera sample plus one for the camera sample's shading.
+    fn cost(&self) -> f64 {
+        self.relmse * (self.rays + 1.0)
+    }
+}
+
+/// The pilot's image size for a render of `settings` at `width` x `height` (None: too small a
+/// render for a pilot): at most PILOT_PIXELS, at most 1/(PILOT_SHARE × MAX_CANDIDATES) of the
+/// render's camera samples at PILOT_SPP (a spp render; a time-budgeted one starts at
+/// PILOT_MIN_PIXELS), the camera's aspect kept.
+pub fn pilot_size(settings: &RenderSettings, width: u32, height: u32) -> Option<(u32, u32)> {
+    let pixels = u64::from(width) * u64::from(height);
+    let mut most = PILOT_PIXELS.min(pixels);
+    if settings.time.is_some() {
+        // Sized again once the first candidate has measured the rate (Renderer::pilot).
+        most = most.min(PILOT_MIN_PIXELS);
+    } else {
+        let samples = pixels * u64::from(settings.spp);
+        most = most.min(samples / (PILOT_SHARE * MAX_CANDIDATES * u64::from(PILOT_SPP)));
+    }
+    if most < PILOT_MIN_PIXELS {
+        return None;
+    }
+    let aspect = f64::from(width) / f64::from(height);
+    let w = ((most as f64 * aspect).sqrt().floor() as u32).clamp(1, width);
+    let h = ((most as f64 / f64::from(w)).floor() as u32).clamp(1, height);
+    Some((w, h))
+}
+
+/// The candidates after `best`, one setting moved at a time: the floor, then N_max down and up,
+/// the BRDF samples down and up, a textured dome's samples down and up.
+fn neighbours(step: usize, best: Counts, textured_dome: bool, finite_lights: bool) -> Vec<Counts> {
+    let c = best;
+    match step {
+        0 if finite_lights && c.light_floor < c.light_samples => vec![Counts {
+            light_floor: c.light_samples,
+            ..c
+        }],
+        1 => {
+            let mut v = Vec::new();
+            let floor_at_max = c.light_floor >= c.light_samples;
+            for n in [c.light_samples / 2, c.light_samples * 2] {
+                if (1..=16).contains(&n) && n != c.light_samples {
+                    let light_floor = if floor_at_max {
+                        n
+                    } else {
+                        c.light_floor.min(n)
+                    };
+                    v.push(Counts {
+                        light_samples: n,
+                        light_floor,
+                        ..c
+                    });
+                }
+            }
+            v
+        }
+        2 => [c.brdf_samples / 2, c.brdf_samples * 2]
+            .into_iter()
+            .filter(|n| (1..=8).contains(n) && *n != c.brdf_samples)
+            .map(|n| Counts {
+                brdf_samples: n,
+                ..c
+            })
+            .collect(),
+        3 if textured_dome => [c.dome_samples / 2, c.dome_samples * 2]
+            .into_iter()
+            .filter(|n| (1..=16).contains(n) && *n != c.dome_samples)
+            .map(|n| Counts {
+                dome_samples: n,
+                ..c
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+pub const STEPS: usize = 4;
+
+impl Renderer {
+    /// The settings a render of `prepared` through `camera` runs with: `settings` with the
+    /// allocation decided when its integrator asks for one to be measured (and none is decided
+    /// yet). Returns the pilot's wall seconds too (0 without one).
+    pub fn decide_allocation(
+        &self,
+        prepared: &PreparedScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<(RenderSettings, f64)> {
+        let mut out = settings.clone();
+        if settings.allocation.is_some() {
+            return Ok((out, 0.0));
+        }
+        if !settings.integrator.measured_allocation() {
+            return Ok((out, 0.0));
+        }
+        // The integrator's own counts: where the search starts.
+        let mut frame = prepared.gpu.frame;
+        settings.integrator.configure(&mut frame);
+        let start = Counts::of(&frame);
+        let Some((w, h)) = pilot_size(settings, camera.width, camera.height) else {
+            out.allocation = Some(Allocation {
+                counts: start,
+                how: "fixed: the render is too small for a pilot".into(),
+            });
+            return Ok((out, 0.0));
+        };
+        let ((counts, tried, stopped, seconds), (w, h)) =
+            self.pilot(prepared, camera, settings, start, (w, h))?;
+        let how = format!(
+            "measured: a pilot of {tried} candidates at {w}x{h}, {PILOT_SPP} spp{}",
+            if stopped {
+                ", cut short by the time budget"
+            } else {
+                ""
+            }
+        );
+        out.allocation = Some(Allocation { counts, how });
+        Ok((out, seconds))
+    }
+
+    /// Renders the candidates from `start` at `size` and returns the best counts, the candidates
+    /// tried, whether the time budget cut the search short, and the wall seconds of the
+    /// candidates' renders (the set-up, kernel compilation included, is the render's); and the
+    /// pilot's image size, which a time budget may have changed.
+    #[allow(clippy::type_complexity)]
+    fn pilot(
+        &self,
+        prepared: &PreparedScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        start: Counts,
+        size: (u32, u32),
+    ) -> Result<((Counts, u32, bool, f64), (u32, u32))> {
+        let ctx = self.context();
+        let mut pilot_camera = camera.clone();
+        (pilot_camera.width, pilot_camera.height) = size;
+        let mut s = RenderSettings {
+            spp: PILOT_SPP,
+            time: None,
+            seed: PILOT_SEED,
+            reference: None,
+            evaluate_passes: false,
+            inject_non_finite: 0,
+            samples: None,
+            crop: None,
+            adaptive: None,
+            allocation: Some(Allocation {
+                counts: start,
+                how: String::new(),
+            }),
+            ..settings.clone()
+        };
+        let frame = &prepared.gpu.frame;
+        let textured_dome = frame.dome_sampling != 0;
+        let finite_lights = frame.light_count > frame.infinite_count;
+        let mut run = super::run::Run::new(self, prepared, &pilot_camera, &s, 1)?;
+        let started = Instant::now();
+        let measure = |run: &mut super::run::Run,
+                       cam: &Camera,
+                       s: &RenderSettings|
+         -> Result<Option<Measured>> {
+            run.set_camera(ctx, prepared, cam, s)?;
+            let o = run
+                .blocking(ctx, s)
+                .render_seed(PILOT_SEED, &mut |_, _| {})?;
+            let r = &o.resolved;
+            let relmse =
+                crate::metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, &r.counts);
+            let samples: u64 = r.counts.iter().map(|&c| u64::from(c)).sum();
+            Ok(match relmse {
+                Some(e) if e > 0.0 && e.is_finite() && samples > 0 && !o.interrupted => {
+                    Some(Measured {
+                        relmse: e,
+                        rays: r.rays as f64 / samples as f64,
+                    })
+                }
+                _ => None,
+            })
+        };
+        let over_time = || {
+            settings
+                .time
+                .is_some_and(|t| started.elapsed().as_secs_f64() > PILOT_TIME_SHARE * t)
+        };
+        let mut tried = 1;
+        let mut first = measure(&mut run, &pilot_camera, &s)?;
+        if let Some(t) = settings.time {
+            // The first candidate's rate sizes the pilot: each candidate its share of the time.
+            let share = PILOT_TIME_SHARE * t / MAX_CANDIDATES as f64;
+            let took = started.elapsed().as_secs_f64();
+            if took > share {
+                run.keep(prepared);
+                return Ok(((start, tried, true, took), size));
+            }
+            let scale = (share / took).min(PILOT_PIXELS as f64 / PILOT_MIN_PIXELS as f64);
+            if scale > 1.5 {
+                let aspect = f64::from(camera.width) / f64::from(camera.height);
+                let pixels = (f64::from(size.0 * size.1) * scale).min(PILOT_PIXELS as f64);
+                let w = ((pixels * aspect).sqrt().floor() as u32).clamp(1, camera.width);
+                let h = ((pixels / f64::from(w)).floor() as u32).clamp(1, camera.height);
+                (pilot_camera.width, pilot_camera.height) = (w, h);
+                run.keep(prepared);
+                run = super::run::Run::new(self, prepared, &pilot_camera, &s, 1)?;
+                first = measure(&mut run, &pilot_camera, &s)?;
+                tried += 1;
+            }
+        }
+        let size = (pilot_camera.width, pilot_camera.height);
+        let Some(mut best_cost) = first.map(|m| m.cost()) else {
+            // A black or unmeasurable pilot: nothing to choose by.
+            run.keep(prepared);
+            return Ok(((start, tried, false, started.elapsed().as_secs_f64()), size));
+        };
+        let mut best = start;
+        let mut stopped = false;
+        'steps: for step in 0..STEPS {
+            for c in neighbours(step, best, textured_dome, finite_lights) {
+                if over_time() {
+                    stopped = true;
+                    break 'steps;
+                }
+                s.allocation = Some(Allocation {
+                    counts: c,
+                    how: String::new(),
+                });
+                tried += 1;
+                if let Some(m) = measure(&mut run, &pilot_camera, &s)?
+                    && m.cost() < MARGIN * best_cost
+                {
+                    (best, best_cost) = (c, m.cost());
+                }
+            }
+        }
+        if crate::vk::kernel_times() {
+            crate::note!(
+                "illum: allocation pilot: {tried} candidates in {:.3} s, chose {}",
+                started.elapsed().as_secs_f64(),
+                best.describe()
+            );
+        }
+        run.keep(prepared);
+        Ok((
+            (best, tried, stopped, started.elapsed().as_secs_f64()),
+            size,
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(spp: u32, time: Option<f64>) -> RenderSettings {
+        RenderSettings {
+            spp,
+            time,
+            ..RenderSettings::default()
+        }
+    }
+
+    #[test]
+    fn pilot_size_follows_the_render_not_the_job() {
+        // 640x480 at 16 spp: 4.9M camera samples, 1/128 of them at 16 spp is 2400 pixels.
+        let (w, h) = pilot_size(&settings(16, None), 640, 480).unwrap();
+        assert!(
+            u64::from(w * h) <= 2400 && u64::from(w * h) > 2200,
+            "{w}x{h}"
+        );
+        assert!((f64::from(w) / f64::from(h) - 640.0 / 480.0).abs() < 0.05);
+        // A crop or sample range leaves it as it is.
+        let mut job = settings(16, None);
+        job.samples = Some((4, 8));
+        job.crop = Some(crate::film::Window {
+            x0: 0,
+            y0: 0,
+            x1: 8,
+            y1: 8,
+        });
+        assert_eq!(pilot_size(&job, 640, 480), Some((w, h)));
+        // Large renders stop at PILOT_PIXELS, small ones have none.
+        let (w, h) = pilot_size(&settings(1024, None), 1920, 1080).unwrap();
+        assert!(u64::from(w * h) <= PILOT_PIXELS);
+        assert_eq!(pilot_size(&settings(16, None), 64, 48), None);
+        // A time budget: the smallest pilot, whatever the spp cap, sized again by its rate.
+        let (w, h) = pilot_size(&settings(1, Some(1.0)), 640, 480).unwrap();
+        assert!(u64::from(w * h) <= PILOT_MIN_PIXELS && u64::from(w * h) > 950);
+    }
+
+    #[test]
+    fn candidates_move_one_setting_within_bounds() {
+        let c = Counts {
+            light_samples: 4,
+            brdf_samples: 2,
+            dome_samples: 8,
+            light_floor: 1,
+        };
+        assert_eq!(
+            neighbours(0, c, false, true),
+            vec![Counts {
+                light_floor: 4,
+                ..c
+            }]
+        );
+        // No finite light: the floor changes nothing.
+        assert!(neighbours(0, c, false, false).is_empty());
+        let n = neighbours(
+            1,
+            Counts {
+                light_floor: 4,
+                ..c
+            },
+            false,
+            true,
+        );
+        assert_eq!(n.len(), 2);
+        assert!(n.iter().all(|k| k.light_floor == k.light_samples));
+        assert_eq!(neighbours(2, c, false, true).len(), 2);
+        assert!(neighbours(3, c, false, true).is_empty());
+        let d = neighbours(3, c, true, true);
+        assert_eq!(
+            d.iter().map(|k| k.dome_samples).collect::<Vec<_>>(),
+            [4, 16]
+        );
+        let top = Counts {
+            dome_samples: 16,
+            brdf_samples: 1,
+            ..c
+        };
+        assert_eq!(neighbours(3, top, true, true).len(), 1);
+        assert_eq!(neighbours(2, top, true, true).len(), 1);
+        assert!(neighbours(STEPS, c, true, true).is_empty());
+    }
+}
