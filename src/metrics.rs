@@ -71,21 +71,44 @@ pub fn estimated_relmse(
     counts: &[u32],
 ) -> Option<f64> {
     let (mut sum, mut count) = (0.0, 0u64);
-    for (((i, e), o), &n) in image.iter().zip(even).zip(odd).zip(counts) {
-        if n < 2 || !(finite(i) && finite(e) && finite(o)) {
-            continue;
-        }
-        let ne = f64::from(n.div_ceil(2));
-        let no = f64::from(n / 2);
-        let scale = 1.0 / (f64::from(n) * (1.0 / ne + 1.0 / no));
-        for c in 0..3 {
-            let d = f64::from(e[c]) - f64::from(o[c]);
-            let x = f64::from(i[c]);
-            sum += d * d * scale / (x * x + RELMSE_EPSILON);
+    for t in estimated_relmse_pixels(image, even, odd, counts) {
+        if !t.is_nan() {
+            sum += t;
             count += 1;
         }
     }
     (count > 0).then(|| sum / count as f64)
+}
+
+/// Each pixel's term of [`estimated_relmse`] (its channels' mean), NaN for a pixel left out:
+/// what two renders of the same pixels are compared by, pixel against pixel.
+pub fn estimated_relmse_pixels(
+    image: &[[f32; 3]],
+    even: &[[f32; 3]],
+    odd: &[[f32; 3]],
+    counts: &[u32],
+) -> Vec<f64> {
+    image
+        .iter()
+        .zip(even)
+        .zip(odd)
+        .zip(counts)
+        .map(|(((i, e), o), &n)| {
+            if n < 2 || !(finite(i) && finite(e) && finite(o)) {
+                return f64::NAN;
+            }
+            let ne = f64::from(n.div_ceil(2));
+            let no = f64::from(n / 2);
+            let scale = 1.0 / (f64::from(n) * (1.0 / ne + 1.0 / no));
+            let mut pixel = 0.0;
+            for c in 0..3 {
+                let d = f64::from(e[c]) - f64::from(o[c]);
+                let x = f64::from(i[c]);
+                pixel += d * d * scale / (x * x + RELMSE_EPSILON);
+            }
+            pixel / 3.0
+        })
+        .collect()
 }
 
 #[cfg(test)]

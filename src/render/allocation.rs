@@ -118,19 +118,51 @@ pub struct Allocation {
     pub how: String,
 }
 
-/// One candidate's pilot: estimated relMSE, rays per camera sample, and their product's cost.
-#[derive(Clone, Copy, Debug)]
+/// One candidate's pilot: each pixel's estimated relMSE (NaN: left out) and the rays per
+/// camera sample.
+#[derive(Clone, Debug)]
 struct Measured {
-    relmse: f64,
+    pixels: Vec<f64>,
     rays: f64,
 }
 
 impl Measured {
-    /// relMSE × time, time as rays per camera sample plus one for the camera sample's shading.
-    fn cost(&self) -> f64 {
-        self.relmse * (self.rays + 1.0)
+    /// Its cost and `other`'s over the pixels both measured, cost being relMSE × time, time as
+    /// rays per camera sample plus one for the camera sample's shading; and the standard error
+    /// of their difference, pixel by pixel (the candidates share the pilot's seed, so their
+    /// pixels' errors go together: the paired difference is far steadier than either).
+    fn against(&self, other: &Measured) -> (f64, f64, f64) {
+        let (a, b) = (self.rays + 1.0, other.rays + 1.0);
+        let (mut n, mut sa, mut sb, mut sd2) = (0.0, 0.0, 0.0, 0.0);
+        for (x, y) in self.pixels.iter().zip(&other.pixels) {
+            if x.is_nan() || y.is_nan() {
+                continue;
+            }
+            let d = x * a - y * b;
+            n += 1.0;
+            sa += x * a;
+            sb += y * b;
+            sd2 += d * d;
+        }
+        if n < 2.0 {
+            return (f64::NAN, f64::NAN, f64::NAN);
+        }
+        let md = (sa - sb) / n;
+        let var = ((sd2 - n * md * md) / (n - 1.0)).max(0.0);
+        (sa / n, sb / n, (var / n).sqrt())
+    }
+
+    /// Whether it costs less than `best` by more than MARGIN and by more than Z standard errors
+    /// of their paired difference: a move the pilot's noise does not explain.
+    fn beats(&self, best: &Measured) -> bool {
+        let (mine, theirs, se) = self.against(best);
+        mine < MARGIN * theirs && theirs - mine > Z * se
     }
 }
+
+/// Standard errors of the paired difference a candidate's gain must exceed (the pixels'
+/// estimates are independent of each other; their heavy tails make this a floor, not a bound).
+pub const Z: f64 = 2.0;
 
 /// The pilot's image size for a render of `settings` at `width` x `height` (None: too small a
 /// render for a pilot): at most PILOT_PIXELS, at most 1/(PILOT_SHARE × MAX_CANDIDATES) of the
@@ -293,18 +325,14 @@ impl Renderer {
                 .blocking(ctx, s)
                 .render_seed(PILOT_SEED, &mut |_, _| {})?;
             let r = &o.resolved;
-            let relmse =
-                crate::metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, &r.counts);
+            let pixels =
+                crate::metrics::estimated_relmse_pixels(&r.film.beauty, &r.even, &r.odd, &r.counts);
             let samples: u64 = r.counts.iter().map(|&c| u64::from(c)).sum();
-            Ok(match relmse {
-                Some(e) if e > 0.0 && e.is_finite() && samples > 0 && !o.interrupted => {
-                    Some(Measured {
-                        relmse: e,
-                        rays: r.rays as f64 / samples as f64,
-                    })
-                }
-                _ => None,
-            })
+            let seen = pixels.iter().any(|t| *t > 0.0 && t.is_finite());
+            Ok((seen && samples > 0 && !o.interrupted).then(|| Measured {
+                pixels,
+                rays: r.rays as f64 / samples as f64,
+            }))
         };
         let over_time = || {
             settings
@@ -318,6 +346,12 @@ impl Renderer {
             let share = PILOT_TIME_SHARE * t / MAX_CANDIDATES as f64;
             let took = started.elapsed().as_secs_f64();
             if took > share {
+                if crate::vk::kernel_times() {
+                    crate::note!(
+                        "illum: allocation pilot: its first candidate took {took:.3} s, more than \
+                         its share of the time budget ({share:.3} s): the integrator's counts"
+                    );
+                }
                 run.keep(prepared);
                 return Ok(((start, tried, true, took), size));
             }
@@ -335,7 +369,7 @@ impl Renderer {
             }
         }
         let size = (pilot_camera.width, pilot_camera.height);
-        let Some(mut best_cost) = first.map(|m| m.cost()) else {
+        let Some(mut best_measured) = first else {
             // A black or unmeasurable pilot: nothing to choose by.
             run.keep(prepared);
             return Ok(((start, tried, false, started.elapsed().as_secs_f64()), size));
@@ -353,10 +387,21 @@ impl Renderer {
                     how: String::new(),
                 });
                 tried += 1;
-                if let Some(m) = measure(&mut run, &pilot_camera, &s)?
-                    && m.cost() < MARGIN * best_cost
+                let m = measure(&mut run, &pilot_camera, &s)?;
+                if crate::vk::kernel_times()
+                    && let Some(m) = &m
                 {
-                    (best, best_cost) = (c, m.cost());
+                    let (mine, theirs, se) = m.against(&best_measured);
+                    crate::note!(
+                        "illum: allocation pilot: {} costs {mine:.3e} against {theirs:.3e}, \
+                         difference ± {se:.1e}",
+                        c.describe(),
+                    );
+                }
+                if let Some(m) = m
+                    && m.beats(&best_measured)
+                {
+                    (best, best_measured) = (c, m);
                 }
             }
         }
@@ -413,6 +458,49 @@ mod tests {
         // A time budget: the smallest pilot, whatever the spp cap, sized again by its rate.
         let (w, h) = pilot_size(&settings(1, Some(1.0)), 640, 480).unwrap();
         assert!(u64::from(w * h) <= PILOT_MIN_PIXELS && u64::from(w * h) > 950);
+    }
+
+    #[test]
+    fn a_candidate_must_beat_the_best_by_more_than_its_noise() {
+        let best = Measured {
+            pixels: (0..1000).map(|i| 1.0 + f64::from(i % 7)).collect(),
+            rays: 1.0,
+        };
+        // The same errors: no move.
+        assert!(!best.beats(&best));
+        // Half the error at the same rays, pixel for pixel: a move.
+        let half = Measured {
+            pixels: best.pixels.iter().map(|x| x / 2.0).collect(),
+            rays: 1.0,
+        };
+        assert!(half.beats(&best));
+        // Half the error at three times the rays (cost 0.5 x 4 against 1 x 2): no move.
+        let costly = Measured {
+            rays: 3.0,
+            ..half.clone()
+        };
+        assert!(!costly.beats(&best));
+        // 20% less on average, but from a few pixels' noise: the paired difference's standard
+        // error is larger than the gain.
+        let noisy = Measured {
+            pixels: best
+                .pixels
+                .iter()
+                .enumerate()
+                .map(|(i, x)| if i % 100 == 0 { x * 50.0 } else { x * 0.25 })
+                .collect(),
+            rays: 1.0,
+        };
+        let (mine, theirs, se) = noisy.against(&best);
+        assert!(
+            mine < MARGIN * theirs && theirs - mine < Z * se,
+            "{mine} {theirs} {se}"
+        );
+        assert!(!noisy.beats(&best));
+        // Pixels left out (NaN) on either side are left out of both.
+        let mut gaps = half.clone();
+        gaps.pixels[3] = f64::NAN;
+        assert!(gaps.beats(&best));
     }
 
     #[test]

@@ -155,16 +155,23 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     loop {
-        let next = {
+        let (next, decided) = {
             let mut p = renderer.progressive(&prepared, &view.camera, &settings)?;
-            view.frames_of(&mut p, &mut event_loop, &mut app, &window, &mut present)?
+            let next = view.frames_of(&mut p, &mut event_loop, &mut app, &window, &mut present)?;
+            (next, p.settings().allocation.clone())
         };
         let Next::Edit(edited, saved) = next else {
             break;
         };
         let t0 = Instant::now();
         let how = match view.apply(&renderer, &mut prepared, &edited) {
-            Ok((s, how)) => {
+            Ok((mut s, how)) => {
+                // The allocation pilot ran once, at the start: an edit keeps its counts (a pilot
+                // an edit would hold back the first updated frame), unless the integrator or
+                // its parameters changed.
+                if s.integrator.identity() == settings.integrator.identity() {
+                    s.allocation = decided;
+                }
                 settings = s;
                 how
             }
