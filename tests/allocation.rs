@@ -145,9 +145,9 @@ fn jobs_decide_the_same_allocation_and_merge_bit_identically() {
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
     let mut scene = scene(SMALL_SCENE);
-    // 256 x 128 pixels at 64 spp: large enough for a pilot of 1024 pixels (few samples a
+    // 256 x 176 pixels at 64 spp: large enough for a pilot of 1024 pixels (few samples a
     // pixel: drivers that cut long loops short submit each sample apart).
-    (scene.camera.width, scene.camera.height) = (256, 128);
+    (scene.camera.width, scene.camera.height) = (256, 176);
     let settings =
         |samples: Option<(u32, u32)>, crop: Option<illum::film::Window>| RenderSettings {
             spp: 64,
@@ -192,7 +192,7 @@ fn jobs_decide_the_same_allocation_and_merge_bit_identically() {
             x0: 0,
             y0: 53,
             x1: 256,
-            y1: 128,
+            y1: 176,
         },
     ];
     let parts: Vec<Part> = crops

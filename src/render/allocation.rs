@@ -26,10 +26,13 @@ pub const PILOT_MIN_PIXELS: u64 = 1024;
 /// A spp render spends at most 1/PILOT_SHARE of its camera samples on all its candidates.
 pub const PILOT_SHARE: u64 = 16;
 /// Most candidates a pilot renders.
-pub const MAX_CANDIDATES: u64 = 8;
+pub const MAX_CANDIDATES: u64 = 10;
+/// Under a time budget, the fewest candidates the pilot's time must afford at the first one's
+/// rate (else it tries none).
+pub const LEAST_CANDIDATES: f64 = 4.0;
 /// A time-budgeted render gives its pilot this share of the budget: the first candidate, at
-/// PILOT_MIN_PIXELS, measures the rate that sizes the others (none when it alone took a
-/// candidate's share), and the search stops when the share is spent.
+/// PILOT_MIN_PIXELS, measures the rate that sizes the others (none when the share would not
+/// afford LEAST_CANDIDATES at that rate), and the search stops when the share is spent.
 pub const PILOT_TIME_SHARE: f64 = 0.06;
 /// A candidate replaces the best so far only if its estimated cost × relMSE is below this
 /// share of the best's: the pilot's estimates scatter by 3–20% between seeds
@@ -188,7 +191,8 @@ pub fn pilot_size(settings: &RenderSettings, width: u32, height: u32) -> Option<
 }
 
 /// The candidates after `best`, one setting moved at a time: the floor, then N_max down and up,
-/// the BRDF samples down and up, a textured dome's samples down and up.
+/// the BRDF samples down and up, a textured dome's samples down and up (the pilot goes on the
+/// way a move won, one halving or doubling at a time).
 fn neighbours(step: usize, best: Counts, textured_dome: bool, finite_lights: bool) -> Vec<Counts> {
     let c = best;
     match step {
@@ -236,6 +240,16 @@ fn neighbours(step: usize, best: Counts, textured_dome: bool, finite_lights: boo
 }
 
 pub const STEPS: usize = 4;
+
+/// The setting step `step` moves.
+fn key(step: usize, c: &Counts) -> u32 {
+    match step {
+        0 => c.light_floor,
+        1 => c.light_samples,
+        2 => c.brdf_samples,
+        _ => c.dome_samples,
+    }
+}
 
 impl Renderer {
     /// The settings a render of `prepared` through `camera` runs with: `settings` with the
@@ -345,11 +359,13 @@ impl Renderer {
             // The first candidate's rate sizes the pilot: each candidate its share of the time.
             let share = PILOT_TIME_SHARE * t / MAX_CANDIDATES as f64;
             let took = started.elapsed().as_secs_f64();
-            if took > share {
+            // Too slow for the two candidates of the floor and one more move: none is tried.
+            let least = PILOT_TIME_SHARE * t / LEAST_CANDIDATES;
+            if took > least {
                 if crate::vk::kernel_times() {
                     crate::note!(
                         "illum: allocation pilot: its first candidate took {took:.3} s, more than \
-                         its share of the time budget ({share:.3} s): the integrator's counts"
+                         1/{LEAST_CANDIDATES} of its time ({least:.3} s): the integrator's counts"
                     );
                 }
                 run.keep(prepared);
@@ -377,32 +393,47 @@ impl Renderer {
         let mut best = start;
         let mut stopped = false;
         'steps: for step in 0..STEPS {
-            for c in neighbours(step, best, textured_dome, finite_lights) {
-                if over_time() {
-                    stopped = true;
-                    break 'steps;
-                }
-                s.allocation = Some(Allocation {
-                    counts: c,
-                    how: String::new(),
-                });
-                tried += 1;
-                let m = measure(&mut run, &pilot_camera, &s)?;
-                if crate::vk::kernel_times()
-                    && let Some(m) = &m
-                {
-                    let (mine, theirs, se) = m.against(&best_measured);
-                    crate::note!(
-                        "illum: allocation pilot: {} costs {mine:.3e} against {theirs:.3e}, \
+            // Whether the last move of this step went up: the next tries only that way (a line
+            // search along the setting, one halving or doubling at a time).
+            let mut up: Option<bool> = None;
+            'search: loop {
+                let from = best;
+                for c in neighbours(step, best, textured_dome, finite_lights) {
+                    if up.is_some_and(|u| u != (key(step, &c) > key(step, &from))) {
+                        continue;
+                    }
+                    if over_time() || tried >= MAX_CANDIDATES as u32 {
+                        stopped = over_time();
+                        break 'steps;
+                    }
+                    s.allocation = Some(Allocation {
+                        counts: c,
+                        how: String::new(),
+                    });
+                    tried += 1;
+                    let m = measure(&mut run, &pilot_camera, &s)?;
+                    if crate::vk::kernel_times()
+                        && let Some(m) = &m
+                    {
+                        let (mine, theirs, se) = m.against(&best_measured);
+                        crate::note!(
+                            "illum: allocation pilot: {} costs {mine:.3e} against {theirs:.3e}, \
                          difference ± {se:.1e}",
-                        c.describe(),
-                    );
+                            c.describe(),
+                        );
+                    }
+                    if let Some(m) = m
+                        && m.beats(&best_measured)
+                    {
+                        (best, best_measured) = (c, m);
+                        if step == 0 {
+                            break 'search;
+                        }
+                        up = Some(key(step, &c) > key(step, &from));
+                        continue 'search;
+                    }
                 }
-                if let Some(m) = m
-                    && m.beats(&best_measured)
-                {
-                    (best, best_measured) = (c, m);
-                }
+                break;
             }
         }
         if crate::vk::kernel_times() {
@@ -434,10 +465,10 @@ mod tests {
 
     #[test]
     fn pilot_size_follows_the_render_not_the_job() {
-        // 640x480 at 16 spp: 4.9M camera samples, 1/128 of them at 16 spp is 2400 pixels.
+        // 640x480 at 16 spp: 4.9M camera samples, 1/160 of them at 16 spp is 1920 pixels.
         let (w, h) = pilot_size(&settings(16, None), 640, 480).unwrap();
         assert!(
-            u64::from(w * h) <= 2400 && u64::from(w * h) > 2200,
+            u64::from(w * h) <= 1920 && u64::from(w * h) > 1800,
             "{w}x{h}"
         );
         assert!((f64::from(w) / f64::from(h) - 640.0 / 480.0).abs() < 0.05);
