@@ -35,19 +35,21 @@ fn every_allocation_the_pilot_can_choose_matches_the_closed_form() {
     let ctx = context();
     let renderer = Renderer::new(ctx.clone());
     let scene = scene(DISK);
-    // The floor lifted to N_max, and N_max and the BRDF samples moved with it.
+    // The floor lifted to N_max, and N_max, the BRDF samples and diffuse MIS moved with it.
     for counts in [
         Counts {
             light_samples: 4,
             brdf_samples: 2,
             dome_samples: 8,
             light_floor: 4,
+            diffuse_mis: false,
         },
         Counts {
             light_samples: 8,
             brdf_samples: 1,
             dome_samples: 8,
             light_floor: 8,
+            diffuse_mis: true,
         },
     ] {
         let settings = RenderSettings {

@@ -13,7 +13,7 @@
 
 use super::{PreparedScene, RenderSettings, Renderer};
 use crate::error::Result;
-use crate::layout::Frame;
+use crate::layout::{Frame, INTEGRATOR_DIFFUSE_MIS, TECHNIQUE_MIS};
 use crate::scene::Camera;
 use std::time::Instant;
 
@@ -84,6 +84,8 @@ pub struct Counts {
     pub dome_samples: u32,
     /// Fewest samples per looped light (1: the share rule alone).
     pub light_floor: u32,
+    /// The diffuse lobe also by cosine-sampled BRDF samples under MIS (INTEGRATOR_DIFFUSE_MIS).
+    pub diffuse_mis: bool,
 }
 
 impl Counts {
@@ -94,6 +96,7 @@ impl Counts {
             brdf_samples: frame.brdf_samples,
             dome_samples: frame.dome_samples,
             light_floor: frame.light_floor.max(1),
+            diffuse_mis: frame.integrator_flags & INTEGRATOR_DIFFUSE_MIS != 0,
         }
     }
 
@@ -102,12 +105,20 @@ impl Counts {
         frame.brdf_samples = self.brdf_samples;
         frame.dome_samples = self.dome_samples;
         frame.light_floor = self.light_floor.clamp(1, self.light_samples);
+        frame.integrator_flags &= !INTEGRATOR_DIFFUSE_MIS;
+        if self.diffuse_mis {
+            frame.integrator_flags |= INTEGRATOR_DIFFUSE_MIS;
+        }
     }
 
     pub fn describe(&self) -> String {
         format!(
-            "light_samples={} light_floor={} brdf_samples={} dome_samples={}",
-            self.light_samples, self.light_floor, self.brdf_samples, self.dome_samples
+            "light_samples={} light_floor={} brdf_samples={} dome_samples={} diffuse_mis={}",
+            self.light_samples,
+            self.light_floor,
+            self.brdf_samples,
+            self.dome_samples,
+            if self.diffuse_mis { "on" } else { "off" }
         )
     }
 }
@@ -193,8 +204,13 @@ pub fn pilot_size(settings: &RenderSettings, width: u32, height: u32) -> Option<
 /// The candidates after `best`, one setting moved at a time: the floor, then N_max down and up,
 /// the BRDF samples down and up, a textured dome's samples down and up (the pilot goes on the
 /// way a move won, one halving or doubling at a time).
-fn neighbours(step: usize, best: Counts, textured_dome: bool, finite_lights: bool) -> Vec<Counts> {
+fn neighbours(step: usize, best: Counts, scene: Scope) -> Vec<Counts> {
     let c = best;
+    let Scope {
+        textured_dome,
+        finite_lights,
+        mis,
+    } = scene;
     match step {
         0 if finite_lights && c.light_floor < c.light_samples => vec![Counts {
             light_floor: c.light_samples,
@@ -235,11 +251,26 @@ fn neighbours(step: usize, best: Counts, textured_dome: bool, finite_lights: boo
                 ..c
             })
             .collect(),
+        4 if mis => vec![Counts {
+            diffuse_mis: !c.diffuse_mis,
+            ..c
+        }],
         _ => Vec::new(),
     }
 }
 
-pub const STEPS: usize = 4;
+/// What of the scene decides which candidates mean anything.
+#[derive(Clone, Copy, Debug)]
+struct Scope {
+    /// A dome with sampling tables (dome_samples applies).
+    textured_dome: bool,
+    /// A light that is not infinite (the floor applies).
+    finite_lights: bool,
+    /// Direct lighting by MIS (diffuse MIS applies).
+    mis: bool,
+}
+
+pub const STEPS: usize = 5;
 
 /// The setting step `step` moves.
 fn key(step: usize, c: &Counts) -> u32 {
@@ -247,7 +278,8 @@ fn key(step: usize, c: &Counts) -> u32 {
         0 => c.light_floor,
         1 => c.light_samples,
         2 => c.brdf_samples,
-        _ => c.dome_samples,
+        3 => c.dome_samples,
+        _ => u32::from(c.diffuse_mis),
     }
 }
 
@@ -326,8 +358,13 @@ impl Renderer {
             ..settings.clone()
         };
         let frame = &prepared.gpu.frame;
-        let textured_dome = frame.dome_sampling != 0;
-        let finite_lights = frame.light_count > frame.infinite_count;
+        let mut configured = *frame;
+        settings.integrator.configure(&mut configured);
+        let scope = Scope {
+            textured_dome: frame.dome_sampling != 0,
+            finite_lights: frame.light_count > frame.infinite_count,
+            mis: configured.technique == TECHNIQUE_MIS,
+        };
         let mut run = super::run::Run::new(self, prepared, &pilot_camera, &s, 1)?;
         let started = Instant::now();
         let measure = |run: &mut super::run::Run,
@@ -398,7 +435,7 @@ impl Renderer {
             let mut up: Option<bool> = None;
             'search: loop {
                 let from = best;
-                for c in neighbours(step, best, textured_dome, finite_lights) {
+                for c in neighbours(step, best, scope) {
                     if up.is_some_and(|u| u != (key(step, &c) > key(step, &from))) {
                         continue;
                     }
@@ -426,7 +463,7 @@ impl Renderer {
                         && m.beats(&best_measured)
                     {
                         (best, best_measured) = (c, m);
-                        if step == 0 {
+                        if step == 0 || step == 4 {
                             break 'search;
                         }
                         up = Some(key(step, &c) > key(step, &from));
@@ -541,30 +578,37 @@ mod tests {
             brdf_samples: 2,
             dome_samples: 8,
             light_floor: 1,
+            diffuse_mis: false,
         };
+        let scope = |textured_dome, finite_lights, mis| Scope {
+            textured_dome,
+            finite_lights,
+            mis,
+        };
+        let plain = scope(false, true, true);
         assert_eq!(
-            neighbours(0, c, false, true),
+            neighbours(0, c, plain),
             vec![Counts {
                 light_floor: 4,
                 ..c
             }]
         );
         // No finite light: the floor changes nothing.
-        assert!(neighbours(0, c, false, false).is_empty());
+        assert!(neighbours(0, c, scope(false, false, true)).is_empty());
         let n = neighbours(
             1,
             Counts {
                 light_floor: 4,
                 ..c
             },
-            false,
-            true,
+            plain,
         );
         assert_eq!(n.len(), 2);
         assert!(n.iter().all(|k| k.light_floor == k.light_samples));
-        assert_eq!(neighbours(2, c, false, true).len(), 2);
-        assert!(neighbours(3, c, false, true).is_empty());
-        let d = neighbours(3, c, true, true);
+        assert_eq!(neighbours(2, c, plain).len(), 2);
+        assert!(neighbours(3, c, plain).is_empty());
+        let dome = scope(true, true, true);
+        let d = neighbours(3, c, dome);
         assert_eq!(
             d.iter().map(|k| k.dome_samples).collect::<Vec<_>>(),
             [4, 16]
@@ -574,8 +618,45 @@ mod tests {
             brdf_samples: 1,
             ..c
         };
-        assert_eq!(neighbours(3, top, true, true).len(), 1);
-        assert_eq!(neighbours(2, top, true, true).len(), 1);
-        assert!(neighbours(STEPS, c, true, true).is_empty());
+        assert_eq!(neighbours(3, top, dome).len(), 1);
+        assert_eq!(neighbours(2, top, dome).len(), 1);
+        // Diffuse MIS is toggled under MIS only.
+        assert_eq!(
+            neighbours(4, c, plain),
+            vec![Counts {
+                diffuse_mis: true,
+                ..c
+            }]
+        );
+        assert!(neighbours(4, c, scope(false, true, false)).is_empty());
+        assert!(neighbours(STEPS, c, dome).is_empty());
+    }
+
+    #[test]
+    fn counts_round_trip_through_the_frame() {
+        let mut f = Frame::default();
+        let c = Counts {
+            light_samples: 8,
+            brdf_samples: 1,
+            dome_samples: 4,
+            light_floor: 8,
+            diffuse_mis: true,
+        };
+        c.apply(&mut f);
+        assert_eq!(Counts::of(&f), c);
+        let off = Counts {
+            diffuse_mis: false,
+            light_floor: 20,
+            ..c
+        };
+        off.apply(&mut f);
+        // The floor is clamped to N_max; diffuse MIS cleared.
+        assert_eq!(
+            Counts::of(&f),
+            Counts {
+                light_floor: 8,
+                ..off
+            }
+        );
     }
 }
