@@ -195,10 +195,23 @@ pub fn pilot_size(settings: &RenderSettings, width: u32, height: u32) -> Option<
     if most < PILOT_MIN_PIXELS {
         return None;
     }
+    Some(sized(most as f64, width, height))
+}
+
+/// An image of about `pixels` pixels (fewer, never more) with the aspect of `width` x `height`,
+/// and no larger.
+fn sized(pixels: f64, width: u32, height: u32) -> (u32, u32) {
     let aspect = f64::from(width) / f64::from(height);
-    let w = ((most as f64 * aspect).sqrt().floor() as u32).clamp(1, width);
-    let h = ((most as f64 / f64::from(w)).floor() as u32).clamp(1, height);
-    Some((w, h))
+    let w = ((pixels * aspect).sqrt().floor() as u32).clamp(1, width);
+    let h = ((pixels / f64::from(w)).floor() as u32).clamp(1, height);
+    (w, h)
+}
+
+/// `v` halved and doubled, those within 1..=`most`.
+fn halved_doubled(v: u32, most: u32) -> impl Iterator<Item = u32> {
+    [v / 2, v * 2]
+        .into_iter()
+        .filter(move |n| (1..=most).contains(n) && *n != v)
 }
 
 /// The candidates after `best`, one setting moved at a time: the floor, then N_max down and up,
@@ -217,35 +230,26 @@ fn neighbours(step: usize, best: Counts, scene: Scope) -> Vec<Counts> {
             ..c
         }],
         1 => {
-            let mut v = Vec::new();
             let floor_at_max = c.light_floor >= c.light_samples;
-            for n in [c.light_samples / 2, c.light_samples * 2] {
-                if (1..=16).contains(&n) && n != c.light_samples {
-                    let light_floor = if floor_at_max {
+            halved_doubled(c.light_samples, 16)
+                .map(|n| Counts {
+                    light_samples: n,
+                    light_floor: if floor_at_max {
                         n
                     } else {
                         c.light_floor.min(n)
-                    };
-                    v.push(Counts {
-                        light_samples: n,
-                        light_floor,
-                        ..c
-                    });
-                }
-            }
-            v
+                    },
+                    ..c
+                })
+                .collect()
         }
-        2 => [c.brdf_samples / 2, c.brdf_samples * 2]
-            .into_iter()
-            .filter(|n| (1..=8).contains(n) && *n != c.brdf_samples)
+        2 => halved_doubled(c.brdf_samples, 8)
             .map(|n| Counts {
                 brdf_samples: n,
                 ..c
             })
             .collect(),
-        3 if textured_dome => [c.dome_samples / 2, c.dome_samples * 2]
-            .into_iter()
-            .filter(|n| (1..=16).contains(n) && *n != c.dome_samples)
+        3 if textured_dome => halved_doubled(c.dome_samples, 16)
             .map(|n| Counts {
                 dome_samples: n,
                 ..c
@@ -257,6 +261,21 @@ fn neighbours(step: usize, best: Counts, scene: Scope) -> Vec<Counts> {
         }],
         _ => Vec::new(),
     }
+}
+
+/// What a pilot found.
+struct Pilot {
+    /// The best counts.
+    counts: Counts,
+    /// Candidates rendered.
+    tried: u32,
+    /// Whether the time budget cut the search short.
+    stopped: bool,
+    /// Wall seconds of the candidates' renders (the set-up, kernel compilation included, is the
+    /// render's).
+    seconds: f64,
+    /// Its image size, which a time budget may have changed.
+    size: (u32, u32),
 }
 
 /// What of the scene decides which candidates mean anything.
@@ -301,9 +320,15 @@ impl Renderer {
             return Ok((out, 0.0));
         }
         // The integrator's own counts: where the search starts.
-        let mut frame = prepared.gpu.frame;
+        let scene = &prepared.gpu.frame;
+        let mut frame = *scene;
         settings.integrator.configure(&mut frame);
         let start = Counts::of(&frame);
+        let scope = Scope {
+            textured_dome: scene.dome_sampling != 0,
+            finite_lights: scene.light_count > scene.infinite_count,
+            mis: frame.technique == TECHNIQUE_MIS,
+        };
         let Some((w, h)) = pilot_size(settings, camera.width, camera.height) else {
             out.allocation = Some(Allocation {
                 counts: start,
@@ -311,33 +336,34 @@ impl Renderer {
             });
             return Ok((out, 0.0));
         };
-        let ((counts, tried, stopped, seconds), (w, h)) =
-            self.pilot(prepared, camera, settings, start, (w, h))?;
+        let p = self.pilot(prepared, camera, settings, start, scope, (w, h))?;
+        let (w, h) = p.size;
         let how = format!(
-            "measured: a pilot of {tried} candidates at {w}x{h}, {PILOT_SPP} spp{}",
-            if stopped {
+            "measured: a pilot of {} candidates at {w}x{h}, {PILOT_SPP} spp{}",
+            p.tried,
+            if p.stopped {
                 ", cut short by the time budget"
             } else {
                 ""
             }
         );
-        out.allocation = Some(Allocation { counts, how });
-        Ok((out, seconds))
+        out.allocation = Some(Allocation {
+            counts: p.counts,
+            how,
+        });
+        Ok((out, p.seconds))
     }
 
-    /// Renders the candidates from `start` at `size` and returns the best counts, the candidates
-    /// tried, whether the time budget cut the search short, and the wall seconds of the
-    /// candidates' renders (the set-up, kernel compilation included, is the render's); and the
-    /// pilot's image size, which a time budget may have changed.
-    #[allow(clippy::type_complexity)]
+    /// Renders the candidates from `start` (those `scope` gives meaning) at `size`.
     fn pilot(
         &self,
         prepared: &PreparedScene,
         camera: &Camera,
         settings: &RenderSettings,
         start: Counts,
+        scope: Scope,
         size: (u32, u32),
-    ) -> Result<((Counts, u32, bool, f64), (u32, u32))> {
+    ) -> Result<Pilot> {
         let ctx = self.context();
         let mut pilot_camera = camera.clone();
         (pilot_camera.width, pilot_camera.height) = size;
@@ -356,14 +382,6 @@ impl Renderer {
                 how: String::new(),
             }),
             ..settings.clone()
-        };
-        let frame = &prepared.gpu.frame;
-        let mut configured = *frame;
-        settings.integrator.configure(&mut configured);
-        let scope = Scope {
-            textured_dome: frame.dome_sampling != 0,
-            finite_lights: frame.light_count > frame.infinite_count,
-            mis: configured.technique == TECHNIQUE_MIS,
         };
         let mut run = super::run::Run::new(self, prepared, &pilot_camera, &s, 1)?;
         let started = Instant::now();
@@ -406,15 +424,19 @@ impl Renderer {
                     );
                 }
                 run.keep(prepared);
-                return Ok(((start, tried, true, took), size));
+                return Ok(Pilot {
+                    counts: start,
+                    tried,
+                    stopped: true,
+                    seconds: took,
+                    size,
+                });
             }
             let scale = (share / took).min(PILOT_PIXELS as f64 / PILOT_MIN_PIXELS as f64);
             if scale > 1.5 {
-                let aspect = f64::from(camera.width) / f64::from(camera.height);
                 let pixels = (f64::from(size.0 * size.1) * scale).min(PILOT_PIXELS as f64);
-                let w = ((pixels * aspect).sqrt().floor() as u32).clamp(1, camera.width);
-                let h = ((pixels / f64::from(w)).floor() as u32).clamp(1, camera.height);
-                (pilot_camera.width, pilot_camera.height) = (w, h);
+                (pilot_camera.width, pilot_camera.height) =
+                    sized(pixels, camera.width, camera.height);
                 run.keep(prepared);
                 run = super::run::Run::new(self, prepared, &pilot_camera, &s, 1)?;
                 first = measure(&mut run, &pilot_camera, &s)?;
@@ -425,7 +447,13 @@ impl Renderer {
         let Some(mut best_measured) = first else {
             // A black or unmeasurable pilot: nothing to choose by.
             run.keep(prepared);
-            return Ok(((start, tried, false, started.elapsed().as_secs_f64()), size));
+            return Ok(Pilot {
+                counts: start,
+                tried,
+                stopped: false,
+                seconds: started.elapsed().as_secs_f64(),
+                size,
+            });
         };
         let mut best = start;
         let mut stopped = false;
@@ -481,10 +509,13 @@ impl Renderer {
             );
         }
         run.keep(prepared);
-        Ok((
-            (best, tried, stopped, started.elapsed().as_secs_f64()),
+        Ok(Pilot {
+            counts: best,
+            tried,
+            stopped,
+            seconds: started.elapsed().as_secs_f64(),
             size,
-        ))
+        })
     }
 }
 
