@@ -8,9 +8,9 @@
 // * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
 //   `share` its solid angle over the hemisphere's 2 pi (1 for the dome), N_L in [floor, N_max]
 //   (floor 1 unless the allocation pilot raised it, src/render/allocation.rs); a
-//   textured dome takes 8 N_max (measured at equal time, light_count_for). Above
-//   DIRECT_LOOP_LIGHTS lights (FEATURE_MANY_LIGHTS), the infinite lights are still looped over that
-//   way and N_max samples are spread over the finite lights, each picking a light by descending the
+//   textured dome takes 8 N_max (measured at equal time, light_count_for). With the light tree
+//   (LIGHT_SELECT_TREE: above DIRECT_LOOP_LIGHTS lights, or where the allocation pilot chose it),
+//   the infinite lights are still looped over that way and N_max samples are spread over the finite lights, each picking a light by descending the
 //   light tree (select_light(), lights/light_select.glsl): light l then has the expected count
 //   n_l = N_max P(l | p, n) in every MIS weight, light_pmf() replaying P from l's trail for BRDF
 //   samples. LIGHT_SELECT_SCAN keeps the former pick (a linear CDF scan over all lights, infinite

@@ -1,6 +1,7 @@
 // Which lights light samples take at a shading point (Frame.light_select), as pbrt-v4's
-// LightSampler: up to DIRECT_LOOP_LIGHTS lights (or with LIGHT_SELECT_LOOP) every light is looped
-// over, each with its own sample count; above it, the infinite lights are still looped over and
+// LightSampler: with LIGHT_SELECT_LOOP (the host's choice up to DIRECT_LOOP_LIGHTS lights, unless
+// the allocation pilot measured the tree cheaper; always without a tree) every light is looped
+// over, each with its own sample count; otherwise the infinite lights are still looped over and
 // each of the other samples picks one light, from the light tree (light_tree.glsl; docs/
 // techniques.md, "The light tree") or by the former linear scan of a CDF over every light, infinite
 // ones included, kept for comparison. select_light() makes a pick and light_pmf() gives the
@@ -40,9 +41,8 @@ struct LightSelection {
 
 LightSelection light_selection(vec3 p, vec3 n) {
     uint nlights = frame.light_count;
-    uint select = has_feature(FEATURE_MANY_LIGHTS) ? frame.light_select : LIGHT_SELECT_LOOP;
     LightSelection s;
-    s.mode = nlights > DIRECT_LOOP_LIGHTS ? select : LIGHT_SELECT_LOOP;
+    s.mode = has_feature(FEATURE_MANY_LIGHTS) ? frame.light_select : LIGHT_SELECT_LOOP;
     s.total_importance = 0.0;
     if (s.mode != LIGHT_SELECT_LOOP && s.mode != LIGHT_SELECT_TREE) {
         for (uint i = 0u; i < nlights; ++i) s.total_importance += light_importance(get_light(i), p, n);

@@ -43,7 +43,8 @@
 #define FEATURE_SUN 16
 #define FEATURE_TEXTURES 32
 #define FEATURE_TRIANGLE_LIGHTS 64
-// More than DIRECT_LOOP_LIGHTS lights: light samples pick lights (Frame.light_select).
+// More than LIGHT_TREE_MIN_LIGHTS lights: the scene has a light tree, and light samples may pick
+// lights (Frame.light_select).
 #define FEATURE_MANY_LIGHTS 128
 // Settings, not the scene: shadow rays for a resampled subset of the candidates
 // (Frame.shadow_resample < 1), and Russian roulette on each candidate (Frame.shadow_cull > 0).
@@ -148,9 +149,13 @@
 #define RADIOSITY_PROBES 16
 #define RADIOSITY_RECORD_KEYS 2
 
-// Lights that direct lighting loops over at every shading point (each with its own sample count);
-// above it, light samples pick lights (FEATURE_MANY_LIGHTS). Measured: docs/performance.md.
+// Lights that direct lighting loops over at every shading point (each with its own sample count)
+// unless told otherwise; above it, light samples pick lights from the light tree. Measured:
+// docs/performance.md. Between LIGHT_TREE_MIN_LIGHTS and it, both can run (FEATURE_MANY_LIGHTS):
+// the allocation pilot measures which costs less (docs/allocation.md). Up to
+// LIGHT_TREE_MIN_LIGHTS lights, a loop costs at most that many shadow rays a round: no tree.
 #define DIRECT_LOOP_LIGHTS 64
+#define LIGHT_TREE_MIN_LIGHTS 8
 // How light samples pick lights (Frame.light_select): loop over every light, the former linear
 // scan of a CDF over all lights (kept for comparison), or the light tree (docs/techniques.md,
 // "The light tree").

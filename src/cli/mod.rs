@@ -171,7 +171,8 @@ impl SceneArgs {
 #[derive(clap::Args, Clone)]
 pub struct IntegratorArgs {
     /// direct: direct lighting only; full: direct lighting, indirect diffuse through the radiosity
-    /// cache, and reflections (caustics left out); path: brute-force path tracer (all light
+    /// cache, and reflections, with caustic paths through specular lobes (`--param caustics=off`:
+    /// the course's split, which leaves them out); path: brute-force path tracer (all light
     /// paths). [default: the scene's "integrator", else direct]
     #[arg(long, value_name = "NAME")]
     pub integrator: Option<String>,
@@ -203,9 +204,10 @@ pub struct IntegratorArgs {
     /// measure the cache's bias and gain. [default: on]
     #[arg(long, value_name = "MODE", value_parser = ["on", "off"])]
     pub radiosity_cache: Option<String>,
-    /// How light samples pick lights in scenes of more than 64 lights: tree (the light tree), scan
-    /// (a linear scan over every light, as before the tree) or loop (every light at every point).
-    /// [default: tree]
+    /// How light samples pick lights in scenes of more than 8 lights: auto (a loop up to 64
+    /// lights, the tree above; `direct` measures which costs less up to 64), tree (the light
+    /// tree), scan (a linear scan over every light, as before the tree) or loop (every light at
+    /// every point). A choice other than auto keeps direct's counts fixed. [default: auto]
     #[arg(long, value_name = "KIND")]
     pub light_selection: Option<String>,
     /// Trace shadow rays for this share (0 to 1] of each group's light and BRDF samples, picked by

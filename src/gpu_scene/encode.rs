@@ -29,7 +29,7 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
     light_mean::set_means(&mut lights, &scene.textures);
     let aabbs = shapes.iter().map(shape_aabb).collect();
     let light_bvh = lights::build(&lights);
-    let many_lights = lights.len() > DIRECT_LOOP_LIGHTS as usize;
+    let many_lights = lights.len() > LIGHT_TREE_MIN_LIGHTS as usize;
     let light_tree = if many_lights {
         let mean_texel = |t: u32| light_tree::texture_mean(&scene.textures[t as usize]);
         light_tree::build(&lights, &mean_texel)?

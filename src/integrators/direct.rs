@@ -48,12 +48,15 @@ impl std::str::FromStr for Technique {
     }
 }
 
-/// How light samples pick lights when a scene has more than DIRECT_LOOP_LIGHTS of them
-/// (the direct-lighting kernel).
+/// How light samples pick lights in a scene with a light tree (more than LIGHT_TREE_MIN_LIGHTS
+/// lights; with fewer, every light is looped over).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSelection {
-    /// Descend the light tree (docs/techniques.md, "The light tree"): O(log n) per sample.
+    /// A loop up to DIRECT_LOOP_LIGHTS lights, the tree above; where both can run, the
+    /// allocation pilot measures which costs less (src/render/allocation.rs).
     #[default]
+    Auto,
+    /// Descend the light tree (docs/techniques.md, "The light tree"): O(log n) per sample.
     Tree,
     /// The former linear scan of a CDF over every light: O(n) per shading point (for comparison).
     Scan,
@@ -64,6 +67,7 @@ pub enum LightSelection {
 impl LightSelection {
     pub fn name(self) -> &'static str {
         match self {
+            LightSelection::Auto => "auto",
             LightSelection::Tree => "tree",
             LightSelection::Scan => "scan",
             LightSelection::Loop => "loop",
@@ -75,11 +79,12 @@ impl std::str::FromStr for LightSelection {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         match s {
+            "auto" => Ok(LightSelection::Auto),
             "tree" => Ok(LightSelection::Tree),
             "scan" => Ok(LightSelection::Scan),
             "loop" => Ok(LightSelection::Loop),
             _ => Err(format!(
-                "unknown light selection {s:?} (expected tree, scan or loop)"
+                "unknown light selection {s:?} (expected auto, tree, scan or loop)"
             )),
         }
     }
@@ -137,7 +142,7 @@ pub struct DirectLighting {
     /// A textured dome's light samples per light sample of other lights (it varies far more
     /// over its directions than any other light).
     pub dome_samples: u32,
-    /// How light samples pick lights above DIRECT_LOOP_LIGHTS lights.
+    /// How light samples pick lights in a scene with a light tree.
     pub light_selection: LightSelection,
     /// Share of each group's shadow-ray candidates that get shadow rays, picked by systematic
     /// resampling on their unshadowed luminance (docs/techniques.md, "Shadow resampling"); 1: all,
@@ -162,7 +167,7 @@ impl Default for DirectLighting {
             brdf_samples: 2,
             diffuse_mis: false,
             dome_samples: 8,
-            light_selection: LightSelection::Tree,
+            light_selection: LightSelection::Auto,
             shadow_resample: 1.0,
             shadow_cull: 0.0,
             control_variates: ControlVariates::Off,
@@ -279,9 +284,13 @@ impl DirectLighting {
             ControlVariates::AvgVis => CONTROL_VARIATES_AVGVIS,
             ControlVariates::Loo => CONTROL_VARIATES_LOO,
         };
-        // Without finite lights there is no tree: the (infinite) lights are looped over.
+        // Without a tree (few or no finite lights) every light is looped over.
+        let tree = frame.light_tree != 0;
         frame.light_select = match self.light_selection {
-            LightSelection::Tree if frame.light_tree != 0 => LIGHT_SELECT_TREE,
+            LightSelection::Tree if tree => LIGHT_SELECT_TREE,
+            LightSelection::Auto if tree && frame.light_count > DIRECT_LOOP_LIGHTS => {
+                LIGHT_SELECT_TREE
+            }
             LightSelection::Scan => LIGHT_SELECT_SCAN,
             _ => LIGHT_SELECT_LOOP,
         };
@@ -332,12 +341,14 @@ impl Direct {
     pub const PARAMS: &[&str] = &["allocation"];
 
     /// Its parameters from `p`. The allocation is measured (auto) unless `p` says fixed, or
-    /// names a sample count without saying auto: counts given are counts meant.
+    /// names a sample count or the light selection without saying auto: counts given are counts
+    /// meant.
     pub fn parse(p: &Params) -> std::result::Result<Direct, String> {
         let mut d = Direct(DirectLighting::parse(p)?);
         let counts_given = ["light_samples", "brdf_samples", "dome_samples"]
             .iter()
-            .any(|n| p.has(n));
+            .any(|n| p.has(n))
+            || d.0.light_selection != LightSelection::Auto;
         let default = if counts_given {
             AllocationMode::Fixed
         } else {

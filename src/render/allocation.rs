@@ -2,8 +2,10 @@
 //! (docs/allocation.md): a pilot renders a small image of the same camera under candidate
 //! allocations and keeps the one with the least estimated relMSE × cost, cost in rays per camera
 //! sample plus one (the camera sample's own shading). The candidates move one setting at a time
-//! from the integrator's counts: the floor under small lights (1, the course's share rule, or
-//! N_max), N_max, the BRDF samples per lobe and a textured dome's samples.
+//! from the integrator's counts: how light samples pick lights (a loop over every light or the
+//! light tree, where the scene has a tree and few enough lights for the loop), the floor under
+//! small lights (1, the course's share rule, or N_max), N_max, the BRDF samples per lobe, a
+//! textured dome's samples and diffuse MIS.
 //!
 //! The pilot is deterministic (its own seed, a size that follows the image and the spp, never the
 //! job's range or crop, and costs counted in rays, not seconds), so every job of a split render
@@ -13,7 +15,10 @@
 
 use super::{PreparedScene, RenderSettings, Renderer};
 use crate::error::Result;
-use crate::layout::{Frame, INTEGRATOR_DIFFUSE_MIS, TECHNIQUE_MIS};
+use crate::layout::{
+    DIRECT_LOOP_LIGHTS, Frame, INTEGRATOR_DIFFUSE_MIS, LIGHT_SELECT_LOOP, LIGHT_SELECT_TREE,
+    TECHNIQUE_MIS,
+};
 use crate::scene::Camera;
 use std::time::Instant;
 
@@ -73,10 +78,13 @@ impl std::str::FromStr for AllocationMode {
 }
 
 /// Direct lighting's sample counts (Frame.light_samples, brdf_samples, dome_samples,
-/// light_floor).
+/// light_floor) and how its light samples pick lights (Frame.light_select).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Counts {
-    /// N_max: most light samples per looped light.
+    /// Light samples pick finite lights from the light tree, N_max of them in all
+    /// (LIGHT_SELECT_TREE); else every light is looped over.
+    pub tree: bool,
+    /// N_max: most light samples per looped light (with the tree: picks per camera sample).
     pub light_samples: u32,
     /// BRDF samples per lobe.
     pub brdf_samples: u32,
@@ -92,6 +100,7 @@ impl Counts {
     /// The counts the frame holds (an integrator has configured it).
     pub fn of(frame: &Frame) -> Counts {
         Counts {
+            tree: frame.light_select == LIGHT_SELECT_TREE,
             light_samples: frame.light_samples,
             brdf_samples: frame.brdf_samples,
             dome_samples: frame.dome_samples,
@@ -101,6 +110,12 @@ impl Counts {
     }
 
     pub fn apply(&self, frame: &mut Frame) {
+        // Only between the loop and the tree (a scan asked for is kept).
+        if self.tree && frame.light_tree != 0 {
+            frame.light_select = LIGHT_SELECT_TREE;
+        } else if frame.light_select == LIGHT_SELECT_TREE {
+            frame.light_select = LIGHT_SELECT_LOOP;
+        }
         frame.light_samples = self.light_samples;
         frame.brdf_samples = self.brdf_samples;
         frame.dome_samples = self.dome_samples;
@@ -113,7 +128,9 @@ impl Counts {
 
     pub fn describe(&self) -> String {
         format!(
-            "light_samples={} light_floor={} brdf_samples={} dome_samples={} diffuse_mis={}",
+            "light_selection={} light_samples={} light_floor={} brdf_samples={} dome_samples={} \
+             diffuse_mis={}",
+            if self.tree { "tree" } else { "loop" },
             self.light_samples,
             self.light_floor,
             self.brdf_samples,
@@ -166,17 +183,23 @@ impl Measured {
         (sa / n, sb / n, (var / n).sqrt())
     }
 
-    /// Whether it costs less than `best` by more than MARGIN and by more than Z standard errors
-    /// of their paired difference: a move the pilot's noise does not explain.
-    fn beats(&self, best: &Measured) -> bool {
+    /// Whether it costs less than `best` by more than MARGIN and by more than `z` standard
+    /// errors of their paired difference: a move the pilot's noise does not explain.
+    fn beats(&self, best: &Measured, z: f64) -> bool {
         let (mine, theirs, se) = self.against(best);
-        mine < MARGIN * theirs && theirs - mine > Z * se
+        mine < MARGIN * theirs && theirs - mine > z * se
     }
 }
 
 /// Standard errors of the paired difference a candidate's gain must exceed (the pixels'
 /// estimates are independent of each other; their heavy tails make this a floor, not a bound).
 pub const Z: f64 = 2.0;
+/// The same for the loop against the tree (step 0): one standard error (84% one-sided). They
+/// are estimators of different kinds whose costs differ 3–60× on the benchmark scenes
+/// (docs/allocation.md), so their gains come mostly from few pixels and rarely reach two
+/// standard errors; and the loop up to DIRECT_LOOP_LIGHTS lights is a rule with no better claim
+/// to stand where the pilot cannot tell.
+pub const Z_SELECTION: f64 = 1.0;
 
 /// The pilot's image size for a render of `settings` at `width` x `height` (None: too small a
 /// render for a pilot): at most PILOT_PIXELS, at most 1/(PILOT_SHARE × MAX_CANDIDATES) of the
@@ -214,22 +237,25 @@ fn halved_doubled(v: u32, most: u32) -> impl Iterator<Item = u32> {
         .filter(move |n| (1..=most).contains(n) && *n != v)
 }
 
-/// The candidates after `best`, one setting moved at a time: the floor, then N_max down and up,
-/// the BRDF samples down and up, a textured dome's samples down and up (the pilot goes on the
-/// way a move won, one halving or doubling at a time).
+/// The candidates after `best`, one setting moved at a time: the loop or the tree, the floor,
+/// then N_max down and up, the BRDF samples down and up, a textured dome's samples down and up,
+/// diffuse MIS (the pilot goes on the way a move won, one halving or doubling at a time).
 fn neighbours(step: usize, best: Counts, scene: Scope) -> Vec<Counts> {
     let c = best;
     let Scope {
         textured_dome,
         finite_lights,
+        selection,
         mis,
     } = scene;
     match step {
-        0 if finite_lights && c.light_floor < c.light_samples => vec![Counts {
+        0 if selection => vec![Counts { tree: !c.tree, ..c }],
+        // The floor is for looped lights: with the tree only the infinite ones are looped.
+        1 if finite_lights && !c.tree && c.light_floor < c.light_samples => vec![Counts {
             light_floor: c.light_samples,
             ..c
         }],
-        1 => {
+        2 => {
             let floor_at_max = c.light_floor >= c.light_samples;
             halved_doubled(c.light_samples, 16)
                 .map(|n| Counts {
@@ -243,19 +269,19 @@ fn neighbours(step: usize, best: Counts, scene: Scope) -> Vec<Counts> {
                 })
                 .collect()
         }
-        2 => halved_doubled(c.brdf_samples, 8)
+        3 => halved_doubled(c.brdf_samples, 8)
             .map(|n| Counts {
                 brdf_samples: n,
                 ..c
             })
             .collect(),
-        3 if textured_dome => halved_doubled(c.dome_samples, 16)
+        4 if textured_dome => halved_doubled(c.dome_samples, 16)
             .map(|n| Counts {
                 dome_samples: n,
                 ..c
             })
             .collect(),
-        4 if mis => vec![Counts {
+        5 if mis => vec![Counts {
             diffuse_mis: !c.diffuse_mis,
             ..c
         }],
@@ -285,21 +311,30 @@ struct Scope {
     textured_dome: bool,
     /// A light that is not infinite (the floor applies).
     finite_lights: bool,
+    /// A light tree, and few enough lights for the loop (DIRECT_LOOP_LIGHTS): both selections
+    /// can run.
+    selection: bool,
     /// Direct lighting by MIS (diffuse MIS applies).
     mis: bool,
 }
 
-pub const STEPS: usize = 5;
+pub const STEPS: usize = 6;
 
 /// The setting step `step` moves.
 fn key(step: usize, c: &Counts) -> u32 {
     match step {
-        0 => c.light_floor,
-        1 => c.light_samples,
-        2 => c.brdf_samples,
-        3 => c.dome_samples,
+        0 => u32::from(c.tree),
+        1 => c.light_floor,
+        2 => c.light_samples,
+        3 => c.brdf_samples,
+        4 => c.dome_samples,
         _ => u32::from(c.diffuse_mis),
     }
+}
+
+/// Steps whose one move is a switch (no line search along them).
+fn switch(step: usize) -> bool {
+    matches!(step, 0 | 1 | 5)
 }
 
 impl Renderer {
@@ -327,6 +362,9 @@ impl Renderer {
         let scope = Scope {
             textured_dome: scene.dome_sampling != 0,
             finite_lights: scene.light_count > scene.infinite_count,
+            selection: scene.light_tree != 0
+                && scene.light_count <= DIRECT_LOOP_LIGHTS
+                && matches!(frame.light_select, LIGHT_SELECT_LOOP | LIGHT_SELECT_TREE),
             mis: frame.technique == TECHNIQUE_MIS,
         };
         let Some((w, h)) = pilot_size(settings, camera.width, camera.height) else {
@@ -488,10 +526,10 @@ impl Renderer {
                         );
                     }
                     if let Some(m) = m
-                        && m.beats(&best_measured)
+                        && m.beats(&best_measured, if step == 0 { Z_SELECTION } else { Z })
                     {
                         (best, best_measured) = (c, m);
-                        if step == 0 || step == 4 {
+                        if switch(step) {
                             break 'search;
                         }
                         up = Some(key(step, &c) > key(step, &from));
@@ -522,6 +560,7 @@ impl Renderer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::layout::LIGHT_SELECT_SCAN;
 
     fn settings(spp: u32, time: Option<f64>) -> RenderSettings {
         RenderSettings {
@@ -566,19 +605,19 @@ mod tests {
             rays: 1.0,
         };
         // The same errors: no move.
-        assert!(!best.beats(&best));
+        assert!(!best.beats(&best, Z));
         // Half the error at the same rays, pixel for pixel: a move.
         let half = Measured {
             pixels: best.pixels.iter().map(|x| x / 2.0).collect(),
             rays: 1.0,
         };
-        assert!(half.beats(&best));
+        assert!(half.beats(&best, Z));
         // Half the error at three times the rays (cost 0.5 x 4 against 1 x 2): no move.
         let costly = Measured {
             rays: 3.0,
             ..half.clone()
         };
-        assert!(!costly.beats(&best));
+        assert!(!costly.beats(&best, Z));
         // 20% less on average, but from a few pixels' noise: the paired difference's standard
         // error is larger than the gain.
         let noisy = Measured {
@@ -595,16 +634,19 @@ mod tests {
             mine < MARGIN * theirs && theirs - mine < Z * se,
             "{mine} {theirs} {se}"
         );
-        assert!(!noisy.beats(&best));
+        assert!(!noisy.beats(&best, Z));
+        // One standard error (the loop against the tree) lets it through.
+        assert!(noisy.beats(&best, Z_SELECTION));
         // Pixels left out (NaN) on either side are left out of both.
         let mut gaps = half.clone();
         gaps.pixels[3] = f64::NAN;
-        assert!(gaps.beats(&best));
+        assert!(gaps.beats(&best, Z));
     }
 
     #[test]
     fn candidates_move_one_setting_within_bounds() {
         let c = Counts {
+            tree: false,
             light_samples: 4,
             brdf_samples: 2,
             dome_samples: 8,
@@ -614,20 +656,32 @@ mod tests {
         let scope = |textured_dome, finite_lights, mis| Scope {
             textured_dome,
             finite_lights,
+            selection: false,
             mis,
         };
         let plain = scope(false, true, true);
+        // The loop or the tree only where both can run.
+        assert!(neighbours(0, c, plain).is_empty());
+        let both = Scope {
+            selection: true,
+            ..plain
+        };
+        assert_eq!(neighbours(0, c, both), vec![Counts { tree: true, ..c }]);
+        let tree = Counts { tree: true, ..c };
+        assert_eq!(neighbours(0, tree, both), vec![c]);
         assert_eq!(
-            neighbours(0, c, plain),
+            neighbours(1, c, plain),
             vec![Counts {
                 light_floor: 4,
                 ..c
             }]
         );
-        // No finite light: the floor changes nothing.
-        assert!(neighbours(0, c, scope(false, false, true)).is_empty());
+        // No finite light, or the tree (which loops over the infinite lights only): the floor
+        // changes nothing.
+        assert!(neighbours(1, c, scope(false, false, true)).is_empty());
+        assert!(neighbours(1, tree, both).is_empty());
         let n = neighbours(
-            1,
+            2,
             Counts {
                 light_floor: 4,
                 ..c
@@ -636,10 +690,10 @@ mod tests {
         );
         assert_eq!(n.len(), 2);
         assert!(n.iter().all(|k| k.light_floor == k.light_samples));
-        assert_eq!(neighbours(2, c, plain).len(), 2);
-        assert!(neighbours(3, c, plain).is_empty());
+        assert_eq!(neighbours(3, c, plain).len(), 2);
+        assert!(neighbours(4, c, plain).is_empty());
         let dome = scope(true, true, true);
-        let d = neighbours(3, c, dome);
+        let d = neighbours(4, c, dome);
         assert_eq!(
             d.iter().map(|k| k.dome_samples).collect::<Vec<_>>(),
             [4, 16]
@@ -649,24 +703,28 @@ mod tests {
             brdf_samples: 1,
             ..c
         };
+        assert_eq!(neighbours(4, top, dome).len(), 1);
         assert_eq!(neighbours(3, top, dome).len(), 1);
-        assert_eq!(neighbours(2, top, dome).len(), 1);
         // Diffuse MIS is toggled under MIS only.
         assert_eq!(
-            neighbours(4, c, plain),
+            neighbours(5, c, plain),
             vec![Counts {
                 diffuse_mis: true,
                 ..c
             }]
         );
-        assert!(neighbours(4, c, scope(false, true, false)).is_empty());
+        assert!(neighbours(5, c, scope(false, true, false)).is_empty());
         assert!(neighbours(STEPS, c, dome).is_empty());
     }
 
     #[test]
     fn counts_round_trip_through_the_frame() {
-        let mut f = Frame::default();
+        let mut f = Frame {
+            light_tree: 0x1000,
+            ..Frame::default()
+        };
         let c = Counts {
+            tree: true,
             light_samples: 8,
             brdf_samples: 1,
             dome_samples: 4,
@@ -689,5 +747,17 @@ mod tests {
                 ..off
             }
         );
+        assert_eq!(f.light_select, LIGHT_SELECT_TREE);
+        Counts { tree: false, ..c }.apply(&mut f);
+        assert_eq!(f.light_select, LIGHT_SELECT_LOOP);
+        // Without a tree the lights are looped over whatever the counts say; a scan asked for
+        // is kept.
+        let mut bare = Frame::default();
+        c.apply(&mut bare);
+        assert_eq!(bare.light_select, LIGHT_SELECT_LOOP);
+        assert!(!Counts::of(&bare).tree);
+        bare.light_select = LIGHT_SELECT_SCAN;
+        Counts { tree: false, ..c }.apply(&mut bare);
+        assert_eq!(bare.light_select, LIGHT_SELECT_SCAN);
     }
 }
