@@ -10,6 +10,9 @@ free of bias and of a reference's own noise. Printed as ratios to the first set.
 
     .venv-py/bin/python scripts/equal-time.py --time 4 --set "fixed=--allocation fixed" \\
         --set "auto=" scenes/bench/suite/*.json scenes/bench/mitsuba-*.json
+
+A set whose options start with @PATH runs the binary at PATH (two builds against each other:
+`--set "before=@/tmp/illum-before" --set "after="`).
 """
 import argparse
 import itertools
@@ -37,15 +40,17 @@ def main():
     ap.add_argument("--illum", default="target/release/illum")
     ap.add_argument("--time", type=float, default=4.0)
     ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--set", action="append", required=True, help="NAME=OPTIONS (repeatable)")
+    ap.add_argument("--set", action="append", required=True,
+                    help="NAME=OPTIONS (repeatable); OPTIONS starting with @PATH run the binary at PATH")
     a = ap.parse_args()
     sets = [(s.split("=", 1)[0], shlex.split(s.split("=", 1)[1])) for s in a.set]
+    sets = [(n, o[0][1:], o[1:]) if o and o[0].startswith("@") else (n, a.illum, o) for n, o in sets]
     out = os.path.join(tempfile.mkdtemp(), "r.exr")
     for scene in a.scenes:
-        res = {n: [] for n, _ in sets}
+        res = {n: [] for n, _, _ in sets}
         for r in range(a.rounds):
-            for name, opts in sets:
-                cmd = [a.illum, "render", scene, "--time", str(a.time), "--spp", "1000000",
+            for name, illum, opts in sets:
+                cmd = [illum, "render", scene, "--time", str(a.time), "--spp", "1000000",
                        "--seed", str(r + 1), "-o", out] + opts
                 p = subprocess.run(cmd, capture_output=True, text=True, check=True)
                 m = re.search(r"at (\d+) spp.*render ([0-9.]+) s .*?([0-9.]+) rays per sample", p.stderr)
