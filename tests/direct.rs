@@ -65,6 +65,23 @@ fn disk_light_matches_the_vector_irradiance_closed_form() {
 }
 
 #[test]
+fn a_constant_dome_gives_pi_l_by_every_technique() {
+    // An unoccluded Lambert floor under a dome of radiance L: E = pi L everywhere. Light samples
+    // of the constant dome are cosine-weighted about the normal, BRDF samples cosine-weighted
+    // too: each is checked alone and under MIS.
+    let json = scene_with(r#"{"dome": {}, "intensity": 0.7}"#, "");
+    let pts = floor_points(DVec3::new(6.0, 1.0, 0.3), 6.0, W, H);
+    for (technique, seed) in [
+        (Technique::Mis, 3),
+        (Technique::Light, 4),
+        (Technique::Brdf, 5),
+    ] {
+        let out = render_technique(&json, 64, technique, seed);
+        assert_lambert_floor(&out, &pts, ALBEDO, |_| PI * 0.7);
+    }
+}
+
+#[test]
 fn sphere_light_matches_the_cap_irradiance() {
     // Sphere light above the floor, fully above every floor point's horizon: E = pi L sin^2 s cos t.
     let (c, r, l) = (DVec3::new(0.0, 1.0, 0.0), 0.3, 5.0);

@@ -246,7 +246,7 @@ ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, 
     GpuLight l = grp.l;
     float n_l = grp.n_l;
     vec2 u = rng_next2(rng);
-    LightSample ls = sample_light(l, plan.dome, sh.p, grp.cv ? u : stratify(u, grp.j - 1u, grp.count, grp.shift, stratify_rows(l, plan.dome)));
+    LightSample ls = sample_light(l, plan.dome, sh.p, sh.n, grp.cv ? u : stratify(u, grp.j - 1u, grp.count, grp.shift, stratify_rows(l, plan.dome)));
     if (!(ls.pdf > 0.0)) return no_shadow_candidate();
     vec3 le = light_radiance(l, ls.uv, ls.delta);
     vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, plan.technique, plan.diffuse_mis, plan.n_b);
@@ -290,7 +290,7 @@ uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, uint i, uint count, i
 ShadowCandidate direct_brdf_light(DirectPlan plan, Shading sh, BrdfDir s, uint id) {
     GpuLight l = light_seen_from(sh, id);
     if (!light_reaches(l)) return no_shadow_candidate();
-    LightHit lh = light_hit(l, plan.dome, sh.p, s.wi);
+    LightHit lh = light_hit(l, plan.dome, sh.p, sh.n, s.wi);
     if (!(lh.pdf > 0.0)) return no_shadow_candidate();
     float w = 1.0;
     if (plan.technique == TECHNIQUE_MIS && !s.delta) {

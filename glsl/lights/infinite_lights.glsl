@@ -91,14 +91,29 @@ float dome_mix_pdf(GpuDomeSampling ds, float table_pdf) {
     return ds.defensive > 0.0 ? ds.defensive / (4.0 * PI) + (1.0 - ds.defensive) * table_pdf : table_pdf;
 }
 
-LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
+// A constant dome (no table) at a shading point with normal n: cosine-weighted about n, pdf
+// cos / pi, the product of its radiance and a diffuse lobe's cosine, so that an unshadowed
+// diffuse point gets its exact irradiance from every sample and no sample falls below the
+// horizon (uniform over the sphere wasted half). It covers every direction direct lighting
+// integrates (eval_lobes() is 0 where n.w <= 0). n = 0 (no shading point): uniform over the sphere.
+LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     LightSample s = no_light_sample();
     s.dist = INF;
     if (ds.width == 0u) {
-        s.wi = uniform_sphere(u);
+        if (n != vec3(0.0)) {
+            vec3 t, b;
+            make_basis(n, t, b);
+            vec3 c = cosine_hemisphere(u);
+            if (!(c.z > 0.0)) return s;
+            s.wi = normalize(c.x * t + c.y * b + c.z * n);
+            s.pdf = max(dot(n, s.wi), 0.0) * INV_PI;
+            if (!(s.pdf > 0.0)) return no_light_sample();
+        } else {
+            s.wi = uniform_sphere(u);
+            s.pdf = 1.0 / (4.0 * PI);
+        }
         s.n = -s.wi;
         s.uv = dome_uv(l, s.wi);
-        s.pdf = 1.0 / (4.0 * PI);
         return s;
     }
     if (ds.defensive > 0.0) {
@@ -138,12 +153,13 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec2 u) {
     return s;
 }
 
-LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 w) {
+LightHit dome_hit(GpuLight l, GpuDomeSampling ds, vec3 n, vec3 w) {
     LightHit h = light_miss();
     h.n = -w;
     h.uv = dome_uv(l, w);
     if (ds.width == 0u) {
-        h.pdf = 1.0 / (4.0 * PI);
+        // sample_dome()'s density at w.
+        h.pdf = n != vec3(0.0) ? max(dot(n, w), 0.0) * INV_PI : 1.0 / (4.0 * PI);
         return h;
     }
     h.pdf = dome_mix_pdf(ds, dome_table_pdf(l, ds, w, h.uv));

@@ -69,29 +69,31 @@
 // Any light. `dome` is only read for LIGHT_DOME. Each kind behind its feature bit: a scene's
 // kernel holds the samplers of the kinds it has (10% less LLVM time for a rect and a dome).
 
-LightSample sample_light(GpuLight l, GpuDomeSampling dome, vec3 p, vec2 u) {
+// n: the shading normal at p (a constant dome samples the cosine about it), or 0 (no shading
+// point: uniform over the sphere).
+LightSample sample_light(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 n, vec2 u) {
     if (light_is(l, LIGHT_RECT)) return sample_rect(l, p, u);
     if (light_is(l, LIGHT_SPHERE)) return sample_sphere(l, p, u);
     if (light_is(l, LIGHT_DISK)) return sample_disk(l, p, u);
     if (light_is(l, LIGHT_SUN)) return sample_sun(l, u);
     if (light_is(l, LIGHT_TRIANGLE)) return sample_triangle(l, p, u);
-    if (light_is(l, LIGHT_DOME)) return sample_dome(l, dome, u);
+    if (light_is(l, LIGHT_DOME)) return sample_dome(l, dome, n, u);
     return no_light_sample();
 }
 
-LightHit light_hit(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 w) {
+LightHit light_hit(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 n, vec3 w) {
     if (light_is(l, LIGHT_RECT)) return rect_hit(l, p, w);
     if (light_is(l, LIGHT_SPHERE)) return sphere_hit(l, p, w);
     if (light_is(l, LIGHT_DISK)) return disk_hit(l, p, w);
     if (light_is(l, LIGHT_SUN)) return sun_hit(l, w);
     if (light_is(l, LIGHT_TRIANGLE)) return triangle_hit(l, p, w);
-    if (light_is(l, LIGHT_DOME)) return dome_hit(l, dome, w);
+    if (light_is(l, LIGHT_DOME)) return dome_hit(l, dome, n, w);
     return light_miss();
 }
 
 // The solid-angle density with which sample_light() produces w (0 where it never does).
-float light_pdf(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 w) {
-    return light_hit(l, dome, p, w).pdf;
+float light_pdf(GpuLight l, GpuDomeSampling dome, vec3 p, vec3 n, vec3 w) {
+    return light_hit(l, dome, p, n, w).pdf;
 }
 
 #endif

@@ -25,14 +25,14 @@ void main() {
     if (pc.x == 0u) {
         Rng rng = rng_init(pc.z, 0x119b7u, i, 0u);
         vec2 u = rng_next2(rng);
-        LightSample s = sample_light(prm.light, prm.dome, p, u);
-        LightHit h = light_hit(prm.light, prm.dome, p, s.wi);
+        LightSample s = sample_light(prm.light, prm.dome, p, vec3(0.0), u);
+        LightHit h = light_hit(prm.light, prm.dome, p, vec3(0.0), s.wi);
         outputs[4u * i] = vec4(s.wi, s.pdf);
         outputs[4u * i + 1u] = vec4(s.x, h.pdf);
         outputs[4u * i + 2u] = vec4(s.uv, s.dist, h.t);
         outputs[4u * i + 3u] = vec4(s.n, float(s.delta));
     } else {
-        LightHit h = light_hit(prm.light, prm.dome, p, inputs[i].xyz);
+        LightHit h = light_hit(prm.light, prm.dome, p, vec3(0.0), inputs[i].xyz);
         outputs[i] = vec4(h.pdf, h.t, h.uv);
     }
 }

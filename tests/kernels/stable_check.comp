@@ -51,8 +51,8 @@ void main() {
         GpuLight l = make_light(LIGHT_SPHERE, q.a, vec4(0.0));
         vec3 p = q.b.xyz;
         LightSample s = sample_sphere(l, p, vec2(q.b.w, q.c.w));
-        LightHit h = light_hit(l, no_dome, p, q.c.xyz);
-        res.r0 = vec4(s.pdf, light_pdf(l, no_dome, p, s.wi), h.pdf, s.dist);
+        LightHit h = light_hit(l, no_dome, p, vec3(0.0), q.c.xyz);
+        res.r0 = vec4(s.pdf, light_pdf(l, no_dome, p, vec3(0.0), s.wi), h.pdf, s.dist);
         res.r1 = vec4(s.wi, h.t);
     } else if (kind == 1u) {
         res.r0.x = rect_solid_angle(q.a.xyz, q.b.xyz, q.c.xyz, q.d.xyz);
@@ -73,7 +73,7 @@ void main() {
         GpuLight l = make_light(LIGHT_SUN, vec4(q.a.xyz, 1.0 - q.a.w), vec4(q.a.w, 0.0, 0.0, 0.0));
         LightSample s = sample_sun(l, q.b.xy);
         res.r0 = vec4(s.wi, s.pdf);
-        res.r1 = vec4(light_pdf(l, no_dome, vec3(0.0), s.wi), s.delta ? 1.0 : 0.0, 0.0, 0.0);
+        res.r1 = vec4(light_pdf(l, no_dome, vec3(0.0), vec3(0.0), s.wi), s.delta ? 1.0 : 0.0, 0.0, 0.0);
     }
     outputs[i] = res;
 }
