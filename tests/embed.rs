@@ -120,7 +120,7 @@ const SPHERE_UNDER_DOME: &str = r#"{"camera": {"position": [0, 0, 3], "look_at":
 /// then uses and destroys the application's device: it is still the application's.
 fn render_and_release(ctx: illum::vk::Context, device: ash::Device, trace: TraceMode) {
     let scene = common::scene(SPHERE_UNDER_DOME);
-    let out = Renderer::new(ctx.clone())
+    let mut out = Renderer::new(ctx.clone())
         .render(
             &scene,
             &RenderSettings {
@@ -131,15 +131,7 @@ fn render_and_release(ctx: illum::vk::Context, device: ash::Device, trace: Trace
             &mut |_, _| {},
         )
         .expect("render on the embedded device");
-    assert_eq!(
-        out.stats.trace,
-        if trace == TraceMode::RayQuery {
-            "rayquery"
-        } else {
-            "bvh"
-        }
-    );
-    check_sphere_under_dome(&scene.camera, &out.film.beauty);
+    let (traced, beauty) = (out.stats.trace, std::mem::take(&mut out.film.beauty));
     drop(out);
     drop(ctx);
     // SAFETY: illum's context is gone; the device is the application's to use and destroy.
@@ -153,6 +145,17 @@ fn render_and_release(ctx: illum::vk::Context, device: ash::Device, trace: Trace
         device.destroy_fence(fence, None);
         device.destroy_device(None);
     }
+    // Checked once the device is gone: a failed check must not leave it alive (the process
+    // then crashed at exit, hiding the other tests' results).
+    assert_eq!(
+        traced,
+        if trace == TraceMode::RayQuery {
+            "rayquery"
+        } else {
+            "bvh"
+        }
+    );
+    check_sphere_under_dome(&scene.camera, &beauty);
 }
 
 /// Records samples [first, first + count) into the host's frame command buffer `cmd`.
