@@ -104,10 +104,10 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
             vec3 t, b;
             make_basis(n, t, b);
             vec3 c = cosine_hemisphere(u);
-            if (!(c.z > 0.0)) return s;
             s.wi = normalize(c.x * t + c.y * b + c.z * n);
+            // dome_hit()'s density, from the same direction (on the horizon: none).
             s.pdf = max(dot(n, s.wi), 0.0) * INV_PI;
-            if (!(s.pdf > 0.0)) return no_light_sample();
+            if (!(c.z > 0.0) || !(s.pdf > 0.0)) return no_light_sample();
         } else {
             s.wi = uniform_sphere(u);
             s.pdf = 1.0 / (4.0 * PI);

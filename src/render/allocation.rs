@@ -15,9 +15,9 @@
 
 use super::{PreparedScene, RenderSettings, Renderer};
 use crate::error::Result;
+use crate::integrators::LightSelection;
 use crate::layout::{
-    DIRECT_LOOP_LIGHTS, Frame, INTEGRATOR_DIFFUSE_MIS, LIGHT_SELECT_LOOP, LIGHT_SELECT_TREE,
-    TECHNIQUE_MIS,
+    Frame, INTEGRATOR_DIFFUSE_MIS, LIGHT_SELECT_LOOP, LIGHT_SELECT_TREE, TECHNIQUE_MIS,
 };
 use crate::scene::Camera;
 use std::time::Instant;
@@ -363,7 +363,7 @@ impl Renderer {
             textured_dome: scene.dome_sampling != 0,
             finite_lights: scene.light_count > scene.infinite_count,
             selection: scene.light_tree != 0
-                && scene.light_count <= DIRECT_LOOP_LIGHTS
+                && LightSelection::loop_affordable(scene)
                 && matches!(frame.light_select, LIGHT_SELECT_LOOP | LIGHT_SELECT_TREE),
             mis: frame.technique == TECHNIQUE_MIS,
         };
