@@ -12,7 +12,7 @@ free of bias and of a reference's own noise. Printed as ratios to the first set.
         --set "auto=" scenes/bench/suite/*.json scenes/bench/mitsuba-*.json
 
 A set whose options start with @PATH runs the binary at PATH (two builds against each other:
-`--set "before=@/tmp/illum-before" --set "after="`).
+`--set "before=@OTHER_BUILD/illum" --set "after="`, OTHER_BUILD a copy of another build).
 """
 import argparse
 import itertools
