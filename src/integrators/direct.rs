@@ -5,7 +5,7 @@
 
 use crate::error::Result;
 use crate::layout::*;
-use crate::render::allocation::AllocationMode;
+use crate::render::allocation::{AllocationMode, loop_affordable};
 use crate::render::film_kernel::{bind_film, dispatch_tile, film_pipeline};
 use crate::render::{Integrator, IntegratorPasses, Params, PreparedScene};
 use crate::shaders;
@@ -65,12 +65,6 @@ pub enum LightSelection {
 }
 
 impl LightSelection {
-    /// Whether a loop over the scene's lights is affordable (up to DIRECT_LOOP_LIGHTS): `auto`
-    /// loops there, and the allocation pilot may measure the tree against it.
-    pub fn loop_affordable(frame: &Frame) -> bool {
-        frame.light_count <= DIRECT_LOOP_LIGHTS
-    }
-
     pub fn name(self) -> &'static str {
         match self {
             LightSelection::Auto => "auto",
@@ -294,9 +288,7 @@ impl DirectLighting {
         let tree = frame.light_tree != 0;
         frame.light_select = match self.light_selection {
             LightSelection::Tree if tree => LIGHT_SELECT_TREE,
-            LightSelection::Auto if tree && !LightSelection::loop_affordable(frame) => {
-                LIGHT_SELECT_TREE
-            }
+            LightSelection::Auto if tree && !loop_affordable(frame) => LIGHT_SELECT_TREE,
             LightSelection::Scan => LIGHT_SELECT_SCAN,
             _ => LIGHT_SELECT_LOOP,
         };

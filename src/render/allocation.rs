@@ -15,9 +15,9 @@
 
 use super::{PreparedScene, RenderSettings, Renderer};
 use crate::error::Result;
-use crate::integrators::LightSelection;
 use crate::layout::{
-    Frame, INTEGRATOR_DIFFUSE_MIS, LIGHT_SELECT_LOOP, LIGHT_SELECT_TREE, TECHNIQUE_MIS,
+    DIRECT_LOOP_LIGHTS, Frame, INTEGRATOR_DIFFUSE_MIS, LIGHT_SELECT_LOOP, LIGHT_SELECT_TREE,
+    TECHNIQUE_MIS,
 };
 use crate::scene::Camera;
 use std::time::Instant;
@@ -289,6 +289,12 @@ fn neighbours(step: usize, best: Counts, scene: Scope) -> Vec<Counts> {
     }
 }
 
+/// Whether a loop over the scene's lights is affordable (up to DIRECT_LOOP_LIGHTS): the `auto`
+/// light selection loops there, and the pilot may measure the tree against it.
+pub fn loop_affordable(frame: &Frame) -> bool {
+    frame.light_count <= DIRECT_LOOP_LIGHTS
+}
+
 /// What a pilot found.
 struct Pilot {
     /// The best counts.
@@ -363,7 +369,7 @@ impl Renderer {
             textured_dome: scene.dome_sampling != 0,
             finite_lights: scene.light_count > scene.infinite_count,
             selection: scene.light_tree != 0
-                && LightSelection::loop_affordable(scene)
+                && loop_affordable(scene)
                 && matches!(frame.light_select, LIGHT_SELECT_LOOP | LIGHT_SELECT_TREE),
             mis: frame.technique == TECHNIQUE_MIS,
         };
