@@ -69,13 +69,105 @@ uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n,
     return lo;
 }
 
+// The density inside a cell (GpuDomeSampling.shape): piecewise bilinear over its 2 x 2 quarters,
+// given by its 3 x 3 nodes (rows r0, r1, r2 from the top, each (left, middle, right)) at x, y in
+// {0, 1/2, 1}. Both shapes other than uniform are exactly this: Mitsuba's one bilinear patch
+// (nodes interpolated from its corners) and the four bilinear quarters of illum's texel. Sampling
+// draws y from the marginal, then x given y, each piecewise linear and inverted in closed form, so
+// (fx, fy) -> (x, y) is monotone in each and the sample sequence's stratification is kept.
+struct DomeCell { vec3 r0, r1, r2; };
+
+// Nodes are luminances; the sign bit of a cell's first node (texel (i, j)) says whether the cell
+// is shaped at all (src/gpu_scene/dome.rs: where its luminance varies enough to pay for it).
+float dome_node(DomeCdfRef nodes, uint stride, int i, int j) {
+    return abs(nodes.v[uint(j + 1) * stride + uint(i + 1)]);
+}
+
+// The nodes of cell (i, j); false when the density is uniform there.
+bool dome_cell(GpuDomeSampling ds, uint i, uint j, out DomeCell c) {
+    c = DomeCell(vec3(1.0), vec3(1.0), vec3(1.0));
+    if (ds.shape == DOME_SHAPE_UNIFORM) return false;
+    DomeCdfRef nodes = DomeCdfRef(ds.nodes);
+    uint s = ds.nodes_width;
+    int x = int(i), y = int(j);
+    if ((floatBitsToUint(nodes.v[(j + 1u) * s + i + 1u]) & 0x80000000u) == 0u) return false;
+    if (ds.shape == DOME_SHAPE_CORNERS) {
+        // Mitsuba: corners are texels (i, j) .. (i + 1, j + 1), the nodes wrapped in u already.
+        vec2 t = vec2(dome_node(nodes, s, x, y), dome_node(nodes, s, x + 1, y));
+        vec2 b = vec2(dome_node(nodes, s, x, y + 1), dome_node(nodes, s, x + 1, y + 1));
+        c.r0 = vec3(t.x, 0.5 * (t.x + t.y), t.y);
+        c.r2 = vec3(b.x, 0.5 * (b.x + b.y), b.y);
+        c.r1 = 0.5 * (c.r0 + c.r2);
+    } else {
+        // illum's bilinear lookup over texel (i, j): at its centre the texel, at its edges the
+        // means of two texels, at its corners of four.
+        vec3 rows[3];
+        for (int d = 0; d < 3; d++) {
+            vec3 t = vec3(dome_node(nodes, s, x - 1, y + d - 1), dome_node(nodes, s, x, y + d - 1),
+                          dome_node(nodes, s, x + 1, y + d - 1));
+            rows[d] = vec3(0.5 * (t.x + t.y), t.y, 0.5 * (t.y + t.z));
+        }
+        c.r0 = 0.5 * (rows[0] + rows[1]);
+        c.r1 = rows[1];
+        c.r2 = 0.5 * (rows[1] + rows[2]);
+    }
+    return true;
+}
+
+// Integral over [0, 1] of the piecewise linear function with nodes n at 0, 1/2, 1 (times 4).
+float dome_pl_mass(vec3 n) { return n.x + 2.0 * n.y + n.z; }
+
+// The piecewise linear function of nodes n at x.
+float dome_pl_eval(vec3 n, float x) {
+    return x < 0.5 ? mix(n.x, n.y, 2.0 * x) : mix(n.y, n.z, 2.0 * x - 1.0);
+}
+
+// x in [0, 1) with density proportional to the line from a (at 0) to b (at 1), by inversion.
+float dome_sample_linear(float u, float a, float b) {
+    if (!(a + b > 0.0)) return u;
+    if (u == 0.0 && a == 0.0) return 0.0;
+    float x = u * (a + b) / (a + sqrt(mix(a * a, b * b, u)));
+    return min(x, 0.99999994);
+}
+
+// x in [0, 1) with density proportional to the piecewise linear function of nodes n.
+float dome_sample_pl(float u, vec3 n) {
+    float sa = n.x + n.y, sb = n.y + n.z;
+    if (!(sa + sb > 0.0)) return u;
+    float t = u * (sa + sb);
+    if (t < sa || !(sb > 0.0)) return 0.5 * dome_sample_linear(min(t / sa, 1.0), n.x, n.y);
+    return 0.5 + 0.5 * dome_sample_linear(min((t - sa) / sb, 1.0), n.y, n.z);
+}
+
+// The cell's nodes along x at height y.
+vec3 dome_cell_row(DomeCell c, float y) {
+    return y < 0.5 ? mix(c.r0, c.r1, 2.0 * y) : mix(c.r1, c.r2, 2.0 * y - 1.0);
+}
+
+// The cell's density at (x, y) relative to uniform (it integrates to 1 over the cell).
+float dome_cell_density(DomeCell c, vec2 f) {
+    vec3 m = vec3(dome_pl_mass(c.r0), dome_pl_mass(c.r1), dome_pl_mass(c.r2));
+    float total = 0.25 * dome_pl_mass(m);   // 16 times the cell's mean
+    if (!(total > 0.0)) return 1.0;
+    return 4.0 * dome_pl_eval(dome_cell_row(c, f.y), f.x) / total;
+}
+
+// (fx, fy) uniform in the cell to a point with the cell's density: y from the marginal, then x.
+vec2 dome_cell_warp(DomeCell c, vec2 f) {
+    vec3 m = vec3(dome_pl_mass(c.r0), dome_pl_mass(c.r1), dome_pl_mass(c.r2));
+    if (!(dome_pl_mass(m) > 0.0)) return f;
+    float y = dome_sample_pl(f.y, m);
+    return vec2(dome_sample_pl(f.x, dome_cell_row(c, y)), y);
+}
+
 // The table's density at direction w of map coordinates uv (0 where it gives none).
 float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     uint W = ds.width, H = ds.height;
     float cu = uv.x - dome_cell_offset(l, W);
     if (cu < 0.0) cu += 1.0;
-    uint i = min(uint(max(cu, 0.0) * float(W)), W - 1u);
-    uint j = min(uint(max(uv.y, 0.0) * float(H)), H - 1u);
+    float x = max(cu, 0.0) * float(W), y = max(uv.y, 0.0) * float(H);
+    uint i = min(uint(x), W - 1u);
+    uint j = min(uint(y), H - 1u);
     DomeCdfRef marg = DomeCdfRef(ds.marginal);
     DomeCdfRef cond = DomeCdfRef(ds.conditional);
     uint base = j * (W + 1u);
@@ -83,7 +175,10 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     float pc = cond.v[base + i + 1u] - cond.v[base + i];
     float jacobian = dome_jacobian(l, w);
     if (!(jacobian > 0.0)) return 0.0;
-    return pm * pc * float(W * H) / jacobian;
+    DomeCell c;
+    float shape = dome_cell(ds, i, j, c)
+        ? dome_cell_density(c, clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0)) : 1.0;
+    return pm * pc * shape * float(W * H) / jacobian;
 }
 
 // The defensive mixture's density from the table's (see the header).
@@ -140,16 +235,21 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     float c0 = cond.v[base + i], c1 = cond.v[base + i + 1u];
     float pm = m1 - m0, pc = c1 - c0;
     if (!(pm > 0.0) || !(pc > 0.0)) return s;
-    float fy = clamp((ux - m0) / pm, 0.0, 1.0);
-    float fx = clamp((uy - c0) / pc, 0.0, 1.0);
-    vec2 uv = vec2((float(i) + fx) / float(W) + dome_cell_offset(l, W), (float(j) + fy) / float(H));
+    vec2 f = clamp(vec2((uy - c0) / pc, (ux - m0) / pm), 0.0, 1.0);
+    DomeCell c;
+    float shape = 1.0;
+    if (dome_cell(ds, i, j, c)) {
+        f = dome_cell_warp(c, f);
+        shape = dome_cell_density(c, f);
+    }
+    vec2 uv = vec2((float(i) + f.x) / float(W) + dome_cell_offset(l, W), (float(j) + f.y) / float(H));
     if (uv.x >= 1.0) uv.x -= 1.0;
     float jacobian;
     s.wi = dome_direction(l, uv, jacobian);
     if (!(jacobian > 0.0)) return s;
     s.n = -s.wi;
     s.uv = uv;
-    s.pdf = dome_mix_pdf(ds, pm * pc * float(W * H) / jacobian);
+    s.pdf = dome_mix_pdf(ds, pm * pc * shape * float(W * H) / jacobian);
     return s;
 }
 

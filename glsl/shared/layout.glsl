@@ -345,6 +345,15 @@ struct GpuLight {
     uint pad;
 };
 
+// The density inside a dome's sampling cell (GpuDomeSampling.shape): uniform (the lookup is constant
+// there: nearest texels, pbrt's square, a black map), one bilinear patch of the cell's four corner
+// texels (Mitsuba's cells between texel centres), or the four bilinear quarters of a texel (illum's
+// bilinear lookup: nodes from the 3 x 3 texels around it). The last two follow the lookup's own
+// luminance, so that a light sample's weight L / pdf does not vary inside a cell.
+#define DOME_SHAPE_UNIFORM 0
+#define DOME_SHAPE_CORNERS 1
+#define DOME_SHAPE_TENT 2
+
 // Importance-sampling tables of a dome's map (src/gpu_scene/dome.rs builds them;
 // glsl/lights/light_sampling.glsl reads them) over a grid of width x height cells of its map
 // coordinates (glsl/lights/dome_map.glsl: the texels, or for the Mitsuba convention the cells
@@ -354,11 +363,16 @@ struct GpuLight {
 struct GpuDomeSampling {
     uint64_t marginal;     // float[height + 1]: CDF over rows, marginal[0] = 0, marginal[height] = 1
     uint64_t conditional;  // float[height * (width + 1)]: per row, CDF over its texels, 0 ... 1
+    uint64_t nodes;        // float[(map width + 2) (map height + 2)]: the luminance the cells' shape
+                           // is drawn from (DOME_SHAPE_*), texel (i, j) at (j + 1) (map width + 2) + i + 1
+                           // for i in -1 ..= map width, j in -1 ..= map height, wrapped as the lookup wraps
     uint width;
     uint height;
     float integral;        // mean texel weight (sum / (width height)), for diagnostics
     float defensive;       // share of samples drawn uniformly over the sphere (pdf mixed alike);
                            // 0 in the buffer, set by dome_sampling() (lights/lights.glsl) under control variates
+    uint shape;            // DOME_SHAPE_*: the density inside a cell
+    uint nodes_width;      // map width + 2 (0 without nodes)
     vec4 sh[9];            // xyz: the dome's radiance (colour included) projected on real SH9 in world
                            // directions, order (l, m) = 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22
                            // (src/gpu_scene/dome_sh.rs): the control variate's L_SH

@@ -18,13 +18,14 @@
 //!
 //! The tables are a marginal CDF over rows and one conditional CDF per row, accumulated in f64 and
 //! stored as f32 with exact 0 and 1 ends. The GPU samples a row and a cell by binary search and a
-//! uniform point inside the cell. Each CDF of n intervals has a guide of n buckets: bucket k holds
+//! point inside the cell, uniform or, where the lookup's luminance varies enough, drawn from it (the
+//! cell's shape: `nodes`, `DOME_SHAPE_*` in glsl/shared/layout.glsl). Each CDF of n intervals has a guide of n buckets: bucket k holds
 //! the index range `[lo, hi)` of the intervals that u in [k/n, (k+1)/n) (widened by 1e-6, more than
 //! the GPU's rounding of `u n`) can fall in, so the search runs over a few intervals instead of n
 //! (O(1) expected steps) and still returns the index of the full search; its pdf is `P(row) P(cell | row) W H / (dω/du dv)` with the
 //! probabilities taken as differences of the stored CDFs — exactly the mass the search assigns.
 
-use crate::layout::GpuDomeSampling;
+use crate::layout::{DOME_SHAPE_CORNERS, DOME_SHAPE_TENT, DOME_SHAPE_UNIFORM, GpuDomeSampling};
 use crate::scene::{DomeConvention, Texture, TextureFilter};
 use glam::{DVec3, Vec3};
 
@@ -45,6 +46,14 @@ pub struct DomeTable {
     /// The dome's radiance on SH9 in world directions (src/gpu_scene/dome_sh.rs), set by the
     /// caller: the control variates' L_SH.
     pub sh: [[f32; 4]; 9],
+    /// `DOME_SHAPE_*`: the density inside a cell.
+    pub shape: u32,
+    /// With a shape other than uniform: the luminance of texel (i, j) at
+    /// `(j + 1) (map width + 2) + i + 1`, for i in -1 ..= map width and j in -1 ..= map height,
+    /// wrapped as the convention's lookup wraps (empty otherwise).
+    pub nodes: Vec<f32>,
+    /// Map width + 2 (0 without nodes).
+    pub nodes_width: u32,
 }
 
 /// Luminance weights of linear RGB (Rec. 709), as `luminance()` in glsl/shared/common.glsl.
@@ -136,6 +145,39 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
             conditional.extend(cdf(&row, *sum));
         }
     }
+    // The density inside a cell follows the lookup's luminance where it varies there.
+    let shape = match (convention, texture.filter) {
+        _ if !(total > 0.0 && total.is_finite()) => DOME_SHAPE_UNIFORM,
+        (DomeConvention::Mitsuba, _) => DOME_SHAPE_CORNERS,
+        (DomeConvention::Illum, TextureFilter::Bilinear) => DOME_SHAPE_TENT,
+        _ => DOME_SHAPE_UNIFORM,
+    };
+    let (nodes, nodes_width) = if shape == DOME_SHAPE_UNIFORM {
+        (Vec::new(), 0)
+    } else {
+        let mut nodes = Vec::with_capacity((tw + 2) * (th + 2));
+        for jj in -1..=th as i64 {
+            for ii in -1..=tw as i64 {
+                // Mitsuba's lookup is periodic in u whatever the texture's wrap (as its cells above).
+                let i = match convention {
+                    DomeConvention::Mitsuba => ii.rem_euclid(tw as i64),
+                    _ => ii,
+                };
+                nodes.push(lum(i, jj) as f32);
+            }
+        }
+        // The cells whose luminance varies enough to pay for a shaped density say so by their
+        // first node's sign bit (the GPU takes every node's magnitude).
+        let flags: Vec<usize> = (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .filter(|&(i, j)| cell_excess(shape, &nodes, tw + 2, i, j) > SHAPED_EXCESS)
+            .map(|(i, j)| (j + 1) * (tw + 2) + i + 1)
+            .collect();
+        for k in flags {
+            nodes[k] = -nodes[k];
+        }
+        (nodes, tw as u32 + 2)
+    };
     let grand: f64 = row_sums.iter().sum();
     let marginal = cdf(&row_sums, grand);
     let mut guides = guide(&marginal);
@@ -145,11 +187,77 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     DomeTable {
         guides,
         sh: [[0.0; 4]; 9],
+        shape,
+        nodes,
+        nodes_width,
         width: w as u32,
         height: h as u32,
         marginal,
         conditional,
         integral: grand / (w * h) as f64,
+    }
+}
+
+/// A cell is sampled by its shape (`DOME_SHAPE_*`) when uniform sampling would raise the second
+/// moment of `L / pdf` for samples inside it by more than this share (its luminance's squared
+/// coefficient of variation over the cell). Below it the shape's extra work (4 to 9 node loads
+/// per sample and per pdf, 8% of a camera sample where every cell of a sky is shaped) buys
+/// nothing measurable: a smooth sky's cells vary by a few percent (excess ~1e-4), a sun's
+/// neighbours by factors (excess ~1).
+const SHAPED_EXCESS: f64 = 0.01;
+
+/// The 3 x 3 nodes of cell (i, j) as `dome_cell()` in glsl/lights/infinite_lights.glsl reads
+/// them from `nodes` (row stride `stride`, texel (i, j) at `(j + 1) stride + i + 1`).
+fn cell_nodes(shape: u32, nodes: &[f32], stride: usize, i: usize, j: usize) -> [[f64; 3]; 3] {
+    let g = |di: isize, dj: isize| {
+        let k = (j as isize + 1 + dj) as usize * stride + (i as isize + 1 + di) as usize;
+        f64::from(nodes[k].abs())
+    };
+    if shape == DOME_SHAPE_CORNERS {
+        let (t, b) = ([g(0, 0), g(1, 0)], [g(0, 1), g(1, 1)]);
+        let r0 = [t[0], 0.5 * (t[0] + t[1]), t[1]];
+        let r2 = [b[0], 0.5 * (b[0] + b[1]), b[1]];
+        let r1 = [
+            0.5 * (r0[0] + r2[0]),
+            0.5 * (r0[1] + r2[1]),
+            0.5 * (r0[2] + r2[2]),
+        ];
+        [r0, r1, r2]
+    } else {
+        let row = |dj: isize| {
+            let t = [g(-1, dj), g(0, dj), g(1, dj)];
+            [0.5 * (t[0] + t[1]), t[1], 0.5 * (t[1] + t[2])]
+        };
+        let (a, b, c) = (row(-1), row(0), row(1));
+        let mid = |x: [f64; 3], y: [f64; 3]| {
+            [
+                0.5 * (x[0] + y[0]),
+                0.5 * (x[1] + y[1]),
+                0.5 * (x[2] + y[2]),
+            ]
+        };
+        [mid(a, b), b, mid(b, c)]
+    }
+}
+
+/// The squared coefficient of variation over cell (i, j) of its piecewise bilinear luminance
+/// (`E[f^2] / E[f]^2 - 1`, uniform over the cell): 0 for a black cell.
+fn cell_excess(shape: u32, nodes: &[f32], stride: usize, i: usize, j: usize) -> f64 {
+    let n = cell_nodes(shape, nodes, stride, i, j);
+    // 1D mass matrix of linear elements on [0, 1]: integral of phi_a phi_b.
+    const M: [[f64; 2]; 2] = [[1.0 / 3.0, 1.0 / 6.0], [1.0 / 6.0, 1.0 / 3.0]];
+    let (mut mean, mut square) = (0.0, 0.0);
+    for (qy, qx) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+        let v = |y: usize, x: usize| n[qy + y][qx + x];
+        mean += 0.25 * 0.25 * (v(0, 0) + v(0, 1) + v(1, 0) + v(1, 1));
+        for (y1, x1, y2, x2) in (0..16).map(|k| (k >> 3 & 1, k >> 2 & 1, k >> 1 & 1, k & 1)) {
+            square += 0.25 * v(y1, x1) * v(y2, x2) * M[y1][y2] * M[x1][x2];
+        }
+    }
+    if mean > 0.0 {
+        square / (mean * mean) - 1.0
+    } else {
+        0.0
     }
 }
 
@@ -250,13 +358,14 @@ impl<F: Fn(i64) -> Vec<f64>> LumRows<F> {
 }
 
 impl DomeTable {
-    /// The data to upload as one buffer, in three parts: the marginal CDF, the conditional
-    /// CDFs, then the guides (u32 pairs).
-    pub fn parts(&self) -> [&[u8]; 3] {
+    /// The data to upload as one buffer, in four parts: the marginal CDF, the conditional
+    /// CDFs, the guides (u32 pairs), then the cells' luminance nodes.
+    pub fn parts(&self) -> [&[u8]; 4] {
         [
             bytemuck::cast_slice(&self.marginal),
             bytemuck::cast_slice(&self.conditional),
             bytemuck::cast_slice(&self.guides),
+            bytemuck::cast_slice(&self.nodes),
         ]
     }
 
@@ -265,6 +374,11 @@ impl DomeTable {
         GpuDomeSampling {
             marginal: address,
             conditional: address + 4 * self.marginal.len() as u64,
+            nodes: address
+                + 4 * (self.marginal.len() + self.conditional.len()) as u64
+                + 8 * self.guides.len() as u64,
+            shape: self.shape,
+            nodes_width: self.nodes_width,
             width: self.width,
             height: self.height,
             integral: self.integral as f32,
@@ -287,6 +401,57 @@ impl DomeTable {
 mod tests {
     use super::*;
     use glam::Vec4;
+
+    #[test]
+    fn cell_excess_is_the_squared_coefficient_of_variation() {
+        // One bilinear patch with corners (1, 0, 0, 0): f = (1 - x)(1 - y), E[f] = 1/4,
+        // E[f^2] = 1/9, so the excess is 16/9 - 1.
+        let stride = 4;
+        let mut nodes = vec![0.0f32; stride * 4];
+        nodes[stride + 1] = 1.0;
+        let e = cell_excess(DOME_SHAPE_CORNERS, &nodes, stride, 0, 0);
+        assert!((e - 7.0 / 9.0).abs() < 1e-12, "{e}");
+        // A constant patch, and illum's tent over a constant neighbourhood: no excess.
+        let flat = vec![2.5f32; stride * 4];
+        assert!(cell_excess(DOME_SHAPE_CORNERS, &flat, stride, 0, 0).abs() < 1e-12);
+        assert!(cell_excess(DOME_SHAPE_TENT, &flat, stride, 1, 1).abs() < 1e-12);
+        // A lone hot texel under illum's bilinear lookup: its own cell's nodes are 1 at the
+        // centre, 1/2 at the edges and 1/4 at the corners: E[f] = 9/16 and E[f^2] = (7/12)^2
+        // (separable: each axis has E[a] = 3/4, E[a^2] = 7/12).
+        let mut hot = vec![0.0f32; stride * 4];
+        hot[2 * stride + 2] = 1.0;
+        let e = cell_excess(DOME_SHAPE_TENT, &hot, stride, 1, 1);
+        let want = (7.0f64 / 12.0).powi(2) / (9.0f64 / 16.0).powi(2) - 1.0;
+        assert!((e - want).abs() < 1e-12, "{e} vs {want}");
+    }
+
+    #[test]
+    fn only_cells_that_vary_are_shaped() {
+        let (w, h) = (8u32, 4u32);
+        let flat = build(
+            &Texture::new("flat", w, h, vec![Vec4::ONE; (w * h) as usize]),
+            Vec3::ONE,
+            DomeConvention::Illum,
+        );
+        assert_eq!(flat.shape, DOME_SHAPE_TENT);
+        assert!(flat.nodes.iter().all(|n| n.is_sign_positive()));
+        let mut texels = vec![Vec4::ONE; (w * h) as usize];
+        texels[(w + 3) as usize] = Vec4::splat(100.0);
+        let hot = build(
+            &Texture::new("hot", w, h, texels),
+            Vec3::ONE,
+            DomeConvention::Mitsuba,
+        );
+        assert_eq!(hot.shape, DOME_SHAPE_CORNERS);
+        let shaped: Vec<(i64, i64)> = (0..hot.height as i64)
+            .flat_map(|j| (0..hot.width as i64).map(move |i| (i, j)))
+            .filter(|&(i, j)| {
+                hot.nodes[((j + 1) * (w as i64 + 2) + i + 1) as usize].is_sign_negative()
+            })
+            .collect();
+        // Mitsuba's cells with texel (3, 1) as a corner: (2, 0), (3, 0), (2, 1), (3, 1).
+        assert_eq!(shaped, vec![(2, 0), (3, 0), (2, 1), (3, 1)]);
+    }
 
     #[test]
     fn hot_texel_spreads_to_its_bilinear_neighbourhood_only() {
