@@ -107,6 +107,36 @@ uint bvh_leaf_count(uint link) { return ((link >> BVH_LEAF_COUNT_SHIFT) & 15u) +
 // Stack entry that marks the return from an instance to the top level.
 const uint BVH_MARKER = 0xfffffffeu;
 
+// The stack's top 8 entries live in vectors (l0, l1: links, top at l0.x; t0, t1: their entry
+// distances; rc of them in use), the rest in the private arrays below them. Lavapipe turns every
+// store to a private array at a per-lane index into 8 masked scalar stores, each reading the old
+// word back for the lanes that do not store: those pushes and pops took 16% of a direct-lighting
+// kernel's time and 26% of the path tracer's (perf of the JIT code, docs/performance-kernels.md).
+// A push or pop of the top is a few vector selects; the arrays take what overflows (rare: the
+// depth of a 4-wide tree).
+//
+// Push n (1 to 3) entries, a on top, then b, then c (distances ka, kb, kc); the entries pushed
+// out below the 8th go to the arrays, deepest first (with rc + n > 8 they are among old 5..7).
+#define BVH_SPILL(k, lk, tk) if (rc > k && k + n >= 8u) { stack[sp] = lk; if (!any_hit) stack_t[sp] = tk; sp++; }
+#define BVH_PUSH(n_, a, b, c, ka, kb, kc) {                                                   \
+        uint n = n_;                                                                        \
+        if (rc + n > 8u) {                                                                  \
+            BVH_SPILL(7u, l1.w, t1.w) BVH_SPILL(6u, l1.z, t1.z) BVH_SPILL(5u, l1.y, t1.y)     \
+            rc = 8u - n;                                                                    \
+        }                                                                                   \
+        if (n == 1u) {                                                                      \
+            l1 = uvec4(l0.w, l1.xyz); l0 = uvec4(a, l0.xyz);                                \
+            if (!any_hit) { t1 = vec4(t0.w, t1.xyz); t0 = vec4(ka, t0.xyz); }               \
+        } else if (n == 2u) {                                                               \
+            l1 = uvec4(l0.zw, l1.xy); l0 = uvec4(a, b, l0.xy);                              \
+            if (!any_hit) { t1 = vec4(t0.zw, t1.xy); t0 = vec4(ka, kb, t0.xy); }            \
+        } else {                                                                            \
+            l1 = uvec4(l0.yzw, l1.x); l0 = uvec4(a, b, c, l0.x);                            \
+            if (!any_hit) { t1 = vec4(t0.yzw, t1.x); t0 = vec4(ka, kb, kc, t0.x); }         \
+        }                                                                                   \
+        rc += n;                                                                            \
+    }
+
 // Walks the BVH; with `any_hit` the first hit ends the walk. Returns whether anything was hit.
 bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_hit, out Hit h) {
     h.t = INF; h.kind = HIT_NONE; h.instance = NONE; h.prim = NONE; h.bary = vec2(0.0);
@@ -116,6 +146,9 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     BvhWordRef inst_words = BvhWordRef(bvh.instances);
     BvhRay world = bvh_ray(o, d);
     BvhRay r = world;
+    uvec4 l0 = uvec4(NONE), l1 = uvec4(NONE);
+    vec4 t0 = vec4(0.0), t1 = vec4(0.0);
+    uint rc = 0u;
     uint stack[BVH_STACK_SIZE];
     float stack_t[BVH_STACK_SIZE];
     uint sp = 0u;
@@ -127,9 +160,18 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     const float widen = 1.0 + 4.0 / 16777216.0;
     for (;;) {
         if (link == NONE) {
-            if (sp == 0u) break;
-            link = stack[--sp];
-            if (!any_hit && link != BVH_MARKER && stack_t[sp] > tmax) link = NONE;
+            float entry;
+            if (rc > 0u) {
+                link = l0.x;
+                l0 = uvec4(l0.yzw, l1.x); l1 = uvec4(l1.yzw, NONE);
+                if (!any_hit) { entry = t0.x; t0 = vec4(t0.yzw, t1.x); t1 = vec4(t1.yzw, 0.0); }
+                rc--;
+            } else {
+                if (sp == 0u) break;
+                link = stack[--sp];
+                if (!any_hit) entry = stack_t[sp];
+            }
+            if (!any_hit && link != BVH_MARKER && entry > tmax) link = NONE;
             if (link == BVH_MARKER) {
                 // Back from an instance to the top level.
                 r = world;
@@ -163,9 +205,8 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
             BVH_CSWAP(x, y) BVH_CSWAP(z, w) BVH_CSWAP(x, z) BVH_CSWAP(y, w) BVH_CSWAP(y, z)
 #undef BVH_CSWAP
             uint count = uint(hits.x) + uint(hits.y) + uint(hits.z) + uint(hits.w);
-            if (count > 3u) { if (!any_hit) stack_t[sp] = key.w; stack[sp++] = l.w; }
-            if (count > 2u) { if (!any_hit) stack_t[sp] = key.z; stack[sp++] = l.z; }
-            if (count > 1u) { if (!any_hit) stack_t[sp] = key.y; stack[sp++] = l.y; }
+            // The second nearest on top, then the third and fourth.
+            if (count > 1u) BVH_PUSH(count - 1u, l.y, l.z, l.w, key.y, key.z, key.w)
             link = count > 0u ? l.x : NONE;
         }
         if (link != NONE && bvh_is_leaf(link) && instance == NONE) {
@@ -183,7 +224,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
                     r = bvh_ray(vec3(dot(row0, oh), dot(row1, oh), dot(row2, oh)),
                                 vec3(dot(row0.xyz, d), dot(row1.xyz, d), dot(row2.xyz, d)));
                     instance = root_index.y;
-                    stack[sp++] = BVH_MARKER;
+                    BVH_PUSH(1u, BVH_MARKER, NONE, NONE, 0.0, 0.0, 0.0)
                     link = root_index.x;
                 } else if (has_feature(FEATURE_SHAPES)) {
                     float t = intersect_shape(get_shape(root_index.y), o, d, tmin, tmax);
@@ -218,6 +259,8 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     }
     return hit;
 }
+#undef BVH_PUSH
+#undef BVH_SPILL
 
 Hit trace_closest(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     Hit h;
