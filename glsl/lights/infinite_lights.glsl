@@ -86,7 +86,7 @@ float dome_node(DomeCdfRef nodes, uint stride, int i, int j) {
 // The nodes of cell (i, j); false when the density is uniform there.
 bool dome_cell(GpuDomeSampling ds, uint i, uint j, out DomeCell c) {
     c = DomeCell(vec3(1.0), vec3(1.0), vec3(1.0));
-    if (ds.shape == DOME_SHAPE_UNIFORM) return false;
+    if (!has_feature(FEATURE_DOME_SHAPED) || ds.shape == DOME_SHAPE_UNIFORM) return false;
     DomeCdfRef nodes = DomeCdfRef(ds.nodes);
     uint s = ds.nodes_width;
     int x = int(i), y = int(j);

@@ -58,6 +58,9 @@
 // Disk and sphere lights, analytic or emissive shapes (like FEATURE_RECT_LIGHTS).
 #define FEATURE_DISK_LIGHTS 2048
 #define FEATURE_SPHERE_LIGHTS 4096
+// A textured dome whose lookup varies inside its sampling cells (Mitsuba's, or illum's bilinear):
+// the cells' shaped densities (DOME_SHAPE_*), whichever cells the map's luminance then shapes.
+#define FEATURE_DOME_SHAPED 8192
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8

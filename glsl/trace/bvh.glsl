@@ -115,24 +115,30 @@ const uint BVH_MARKER = 0xfffffffeu;
 // A push or pop of the top is a few vector selects; the arrays take what overflows (rare: the
 // depth of a 4-wide tree).
 //
-// Push n (1 to 3) entries, a on top, then b, then c (distances ka, kb, kc); the entries pushed
-// out below the 8th go to the arrays, deepest first (with rc + n > 8 they are among old 5..7).
+// An iteration pushes once, at its end (one copy of the code per traversal): n (1 to 4) entries
+// p (top first: an instance's marker, then a node's second, third and fourth nearest children)
+// with distances pt. The entries pushed out below the 8th go to the arrays, deepest first (with
+// rc + n > 8 they are among old 4..7).
 #define BVH_SPILL(k, lk, tk) if (rc > k && k + n >= 8u) { stack[sp] = lk; if (!any_hit) stack_t[sp] = tk; sp++; }
-#define BVH_PUSH(n_, a, b, c, ka, kb, kc) {                                                   \
+#define BVH_PUSH(n_, p, pt) {                                                                 \
         uint n = n_;                                                                        \
         if (rc + n > 8u) {                                                                  \
-            BVH_SPILL(7u, l1.w, t1.w) BVH_SPILL(6u, l1.z, t1.z) BVH_SPILL(5u, l1.y, t1.y)     \
+            BVH_SPILL(7u, l1.w, t1.w) BVH_SPILL(6u, l1.z, t1.z)                               \
+            BVH_SPILL(5u, l1.y, t1.y) BVH_SPILL(4u, l1.x, t1.x)                               \
             rc = 8u - n;                                                                    \
         }                                                                                   \
         if (n == 1u) {                                                                      \
-            l1 = uvec4(l0.w, l1.xyz); l0 = uvec4(a, l0.xyz);                                \
-            if (!any_hit) { t1 = vec4(t0.w, t1.xyz); t0 = vec4(ka, t0.xyz); }               \
+            l1 = uvec4(l0.w, l1.xyz); l0 = uvec4(p.x, l0.xyz);                              \
+            if (!any_hit) { t1 = vec4(t0.w, t1.xyz); t0 = vec4(pt.x, t0.xyz); }             \
         } else if (n == 2u) {                                                               \
-            l1 = uvec4(l0.zw, l1.xy); l0 = uvec4(a, b, l0.xy);                              \
-            if (!any_hit) { t1 = vec4(t0.zw, t1.xy); t0 = vec4(ka, kb, t0.xy); }            \
+            l1 = uvec4(l0.zw, l1.xy); l0 = uvec4(p.xy, l0.xy);                              \
+            if (!any_hit) { t1 = vec4(t0.zw, t1.xy); t0 = vec4(pt.xy, t0.xy); }             \
+        } else if (n == 3u) {                                                               \
+            l1 = uvec4(l0.yzw, l1.x); l0 = uvec4(p.xyz, l0.x);                              \
+            if (!any_hit) { t1 = vec4(t0.yzw, t1.x); t0 = vec4(pt.xyz, t0.x); }             \
         } else {                                                                            \
-            l1 = uvec4(l0.yzw, l1.x); l0 = uvec4(a, b, c, l0.x);                            \
-            if (!any_hit) { t1 = vec4(t0.yzw, t1.x); t0 = vec4(ka, kb, kc, t0.x); }         \
+            l1 = l0; l0 = p;                                                                \
+            if (!any_hit) { t1 = t0; t0 = pt; }                                             \
         }                                                                                   \
         rc += n;                                                                            \
     }
@@ -179,6 +185,10 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
                 link = NONE;
             }
         }
+        // What this iteration pushes (see BVH_PUSH).
+        uint push = 0u;
+        uvec4 pushed = uvec4(NONE);
+        vec4 pushed_t = vec4(0.0);
         if (link != NONE && !bvh_is_leaf(link)) {
             // Child planes: origin + step * q, so t = q * (step / d) + (origin - o) / d.
             uint base = 8u * link;
@@ -206,7 +216,11 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
 #undef BVH_CSWAP
             uint count = uint(hits.x) + uint(hits.y) + uint(hits.z) + uint(hits.w);
             // The second nearest on top, then the third and fourth.
-            if (count > 1u) BVH_PUSH(count - 1u, l.y, l.z, l.w, key.y, key.z, key.w)
+            if (count > 1u) {
+                push = count - 1u;
+                pushed = uvec4(l.yzw, NONE);
+                pushed_t = vec4(key.yzw, 0.0);
+            }
             link = count > 0u ? l.x : NONE;
         }
         if (link != NONE && bvh_is_leaf(link) && instance == NONE) {
@@ -216,7 +230,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
             uint inst_mask = bvh_word(inst_words, base + 7u).x;
             link = NONE;
             if ((inst_mask & mask) != 0u) {
-                if (root_index.x != BVH_SHAPE) {
+                if (has_feature(FEATURE_MESHES) && root_index.x != BVH_SHAPE) {
                     // Rows of world_to_object.
                     vec4 row0 = bvh_row(inst_words, base), row1 = bvh_row(inst_words, base + 2u);
                     vec4 row2 = bvh_row(inst_words, base + 4u);
@@ -224,7 +238,10 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
                     r = bvh_ray(vec3(dot(row0, oh), dot(row1, oh), dot(row2, oh)),
                                 vec3(dot(row0.xyz, d), dot(row1.xyz, d), dot(row2.xyz, d)));
                     instance = root_index.y;
-                    BVH_PUSH(1u, BVH_MARKER, NONE, NONE, 0.0, 0.0, 0.0)
+                    // The marker goes on top of what the node pushed in this iteration.
+                    pushed = uvec4(BVH_MARKER, pushed.xyz);
+                    pushed_t = vec4(0.0, pushed_t.xyz);
+                    push += 1u;
                     link = root_index.x;
                 } else if (has_feature(FEATURE_SHAPES)) {
                     float t = intersect_shape(get_shape(root_index.y), o, d, tmin, tmax);
@@ -237,7 +254,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
                 }
             }
         }
-        if (link != NONE && bvh_is_leaf(link) && instance != NONE) {
+        if (has_feature(FEATURE_MESHES) && link != NONE && bvh_is_leaf(link) && instance != NONE) {
             // One triangle of a bottom-level leaf; the link moves on to the next one.
             uint k = bvh_leaf_first(link);
             float t;
@@ -256,6 +273,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
             }
             link = (link & ~BVH_LEAF_FIRST_MASK) == BVH_LEAF_BIT ? NONE : link + 1u - (1u << BVH_LEAF_COUNT_SHIFT);
         }
+        if (push > 0u) BVH_PUSH(push, pushed, pushed_t)
     }
     return hit;
 }

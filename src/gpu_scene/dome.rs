@@ -69,6 +69,16 @@ pub fn cells(convention: DomeConvention, width: u32, height: u32) -> (u32, u32) 
     }
 }
 
+/// The density inside a sampling cell of a map under `convention` with `filter` (`DOME_SHAPE_*`):
+/// shaped where the lookup varies inside a cell (a black map is uniform whatever this says).
+pub fn cell_shape(convention: DomeConvention, filter: TextureFilter) -> u32 {
+    match (convention, filter) {
+        (DomeConvention::Mitsuba, _) => DOME_SHAPE_CORNERS,
+        (DomeConvention::Illum, TextureFilter::Bilinear) => DOME_SHAPE_TENT,
+        _ => DOME_SHAPE_UNIFORM,
+    }
+}
+
 /// Builds the tables of `texture` as a dome map whose radiance is `tint ⊙ texel` (the tint is the
 /// light's colour; only its relative channel weights matter), laid out as `convention` says.
 pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeTable {
@@ -146,11 +156,10 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
         }
     }
     // The density inside a cell follows the lookup's luminance where it varies there.
-    let shape = match (convention, texture.filter) {
-        _ if !(total > 0.0 && total.is_finite()) => DOME_SHAPE_UNIFORM,
-        (DomeConvention::Mitsuba, _) => DOME_SHAPE_CORNERS,
-        (DomeConvention::Illum, TextureFilter::Bilinear) => DOME_SHAPE_TENT,
-        _ => DOME_SHAPE_UNIFORM,
+    let shape = if total > 0.0 && total.is_finite() {
+        cell_shape(convention, texture.filter)
+    } else {
+        DOME_SHAPE_UNIFORM
     };
     let (nodes, nodes_width) = if shape == DOME_SHAPE_UNIFORM {
         (Vec::new(), 0)

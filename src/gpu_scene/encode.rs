@@ -41,7 +41,11 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
         | feature(!instances.trace.is_empty(), FEATURE_MESHES)
         | feature(!shapes.is_empty(), FEATURE_SHAPES)
         | feature(!textures.is_empty(), FEATURE_TEXTURES)
-        | feature(many_lights, FEATURE_MANY_LIGHTS);
+        | feature(many_lights, FEATURE_MANY_LIGHTS)
+        | feature(
+            dome_shaped(scene, scene_lights.dome_source),
+            FEATURE_DOME_SHAPED,
+        );
     Ok(Host {
         features,
         vertices: meshes.vertices,
@@ -426,6 +430,17 @@ fn encode_textures(scene: &Scene) -> Vec<GpuTexture> {
 }
 
 /// Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
+/// Whether the scene's dome is textured with a lookup that varies inside its sampling cells (the
+/// kernels then hold the cells' shaped densities). Fixed by the texture and the convention, not
+/// by the light's colour, so that an edit of its colour keeps the kernels.
+fn dome_shaped(scene: &Scene, dome_source: Option<(usize, DomeConvention)>) -> bool {
+    dome_source.is_some_and(|(i, convention)| {
+        scene.lights[i].texture.is_some_and(|t| {
+            dome::cell_shape(convention, scene.textures[t as usize].filter) != DOME_SHAPE_UNIFORM
+        })
+    })
+}
+
 fn dome_table(
     scene: &Scene,
     dome_source: Option<(usize, DomeConvention)>,
@@ -566,5 +581,40 @@ fn encode(g: &ShapeGeometry, origin: DVec3) -> Encoded {
                 area: (PI * radius * radius) as f32,
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scene's features with a dome of `dome` (JSON) textured or not by `sky.exr` of
+    /// scenes/bench with `filter`.
+    fn features(dome: &str, texture: bool, filter: &str) -> u32 {
+        let light = if texture {
+            format!(r#"{{"dome": {dome}, "texture": "sky"}}"#)
+        } else {
+            format!(r#"{{"dome": {dome}}}"#)
+        };
+        let json = format!(
+            r#"{{"camera": {{"position": [0, 1, 4], "look_at": [0, 0, 0], "fov_y": 40, "resolution": [8, 8]}},
+                "textures": {{"sky": {{"file": "sky.exr", "filter": "{filter}"}}}},
+                "materials": {{"m": {{"diffuse": [0.5, 0.5, 0.5]}}}},
+                "shapes": {{"s": {{"sphere": {{"center": [0, 0, 0], "radius": 1}}, "material": "m"}}}},
+                "lights": {{"sky": {light}}}}}"#
+        );
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bench");
+        let scene = crate::scene::from_json_str(&json, "test", &dir).unwrap();
+        encode_scene(&scene, DVec3::ZERO, true).unwrap().features
+    }
+
+    #[test]
+    fn shaped_dome_cells_are_a_feature_of_the_lookup() {
+        let shaped = |f: u32| f & FEATURE_DOME_SHAPED != 0;
+        assert!(shaped(features(r#"{"convention": "mitsuba"}"#, true, "bilinear")));
+        assert!(shaped(features("{}", true, "bilinear")));
+        assert!(!shaped(features("{}", true, "nearest")));
+        assert!(!shaped(features("{}", false, "bilinear")));
+        assert!(features("{}", false, "bilinear") & FEATURE_DOME != 0);
     }
 }
