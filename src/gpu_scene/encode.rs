@@ -611,7 +611,11 @@ mod tests {
     #[test]
     fn shaped_dome_cells_are_a_feature_of_the_lookup() {
         let shaped = |f: u32| f & FEATURE_DOME_SHAPED != 0;
-        assert!(shaped(features(r#"{"convention": "mitsuba"}"#, true, "bilinear")));
+        assert!(shaped(features(
+            r#"{"convention": "mitsuba"}"#,
+            true,
+            "bilinear"
+        )));
         assert!(shaped(features("{}", true, "bilinear")));
         assert!(!shaped(features("{}", true, "nearest")));
         assert!(!shaped(features("{}", false, "bilinear")));
