@@ -161,8 +161,8 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     } else {
         DOME_SHAPE_UNIFORM
     };
-    let (nodes, nodes_width) = if shape == DOME_SHAPE_UNIFORM {
-        (Vec::new(), 0)
+    let (shape, nodes, nodes_width) = if shape == DOME_SHAPE_UNIFORM {
+        (shape, Vec::new(), 0)
     } else {
         let mut nodes = Vec::with_capacity((tw + 2) * (th + 2));
         for jj in -1..=th as i64 {
@@ -182,10 +182,15 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
             .filter(|&(i, j)| cell_excess(shape, &nodes, tw + 2, i, j) > SHAPED_EXCESS)
             .map(|(i, j)| (j + 1) * (tw + 2) + i + 1)
             .collect();
-        for k in flags {
-            nodes[k] = -nodes[k];
+        if flags.is_empty() {
+            // A map smooth everywhere (no sun): uniform cells, and no nodes kept or uploaded.
+            (DOME_SHAPE_UNIFORM, Vec::new(), 0)
+        } else {
+            for k in flags {
+                nodes[k] = -nodes[k];
+            }
+            (shape, nodes, tw as u32 + 2)
         }
-        (nodes, tw as u32 + 2)
     };
     let grand: f64 = row_sums.iter().sum();
     let marginal = cdf(&row_sums, grand);
@@ -442,8 +447,9 @@ mod tests {
             Vec3::ONE,
             DomeConvention::Illum,
         );
-        assert_eq!(flat.shape, DOME_SHAPE_TENT);
-        assert!(flat.nodes.iter().all(|n| n.is_sign_positive()));
+        // Nothing varies: uniform, no nodes.
+        assert_eq!(flat.shape, DOME_SHAPE_UNIFORM);
+        assert!(flat.nodes.is_empty() && flat.nodes_width == 0);
         let mut texels = vec![Vec4::ONE; (w * h) as usize];
         texels[(w + 3) as usize] = Vec4::splat(100.0);
         let hot = build(
