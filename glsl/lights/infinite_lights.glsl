@@ -144,20 +144,27 @@ vec3 dome_cell_row(DomeCell c, float y) {
     return y < 0.5 ? mix(c.r0, c.r1, 2.0 * y) : mix(c.r1, c.r2, 2.0 * y - 1.0);
 }
 
-// The cell's density at (x, y) relative to uniform (it integrates to 1 over the cell).
-float dome_cell_density(DomeCell c, vec2 f) {
-    vec3 m = vec3(dome_pl_mass(c.r0), dome_pl_mass(c.r1), dome_pl_mass(c.r2));
-    float total = 0.25 * dome_pl_mass(m);   // 16 times the cell's mean
+// The cell's marginal nodes along y (each row's mass, times 4).
+vec3 dome_cell_marginal(DomeCell c) {
+    return vec3(dome_pl_mass(c.r0), dome_pl_mass(c.r1), dome_pl_mass(c.r2));
+}
+
+// The cell's density at f relative to uniform (it integrates to 1 over the cell), given its
+// marginal m: f over its mean, 16 f / mass(m).
+float dome_cell_density(DomeCell c, vec3 m, vec2 f) {
+    float total = 0.25 * dome_pl_mass(m);
     if (!(total > 0.0)) return 1.0;
     return 4.0 * dome_pl_eval(dome_cell_row(c, f.y), f.x) / total;
 }
 
-// (fx, fy) uniform in the cell to a point with the cell's density: y from the marginal, then x.
-vec2 dome_cell_warp(DomeCell c, vec2 f) {
-    vec3 m = vec3(dome_pl_mass(c.r0), dome_pl_mass(c.r1), dome_pl_mass(c.r2));
-    if (!(dome_pl_mass(m) > 0.0)) return f;
+// (fx, fy) uniform in the cell to a point with the cell's density (y from the marginal, then x
+// given y); returns that density there.
+float dome_cell_warp(DomeCell c, inout vec2 f) {
+    vec3 m = dome_cell_marginal(c);
+    if (!(dome_pl_mass(m) > 0.0)) return 1.0;
     float y = dome_sample_pl(f.y, m);
-    return vec2(dome_sample_pl(f.x, dome_cell_row(c, y)), y);
+    f = vec2(dome_sample_pl(f.x, dome_cell_row(c, y)), y);
+    return dome_cell_density(c, m, f);
 }
 
 // The table's density at direction w of map coordinates uv (0 where it gives none).
@@ -177,7 +184,8 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     if (!(jacobian > 0.0)) return 0.0;
     DomeCell c;
     float shape = dome_cell(ds, i, j, c)
-        ? dome_cell_density(c, clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0)) : 1.0;
+        ? dome_cell_density(c, dome_cell_marginal(c), clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0))
+        : 1.0;
     return pm * pc * shape * float(W * H) / jacobian;
 }
 
@@ -237,11 +245,7 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     if (!(pm > 0.0) || !(pc > 0.0)) return s;
     vec2 f = clamp(vec2((uy - c0) / pc, (ux - m0) / pm), 0.0, 1.0);
     DomeCell c;
-    float shape = 1.0;
-    if (dome_cell(ds, i, j, c)) {
-        f = dome_cell_warp(c, f);
-        shape = dome_cell_density(c, f);
-    }
+    float shape = dome_cell(ds, i, j, c) ? dome_cell_warp(c, f) : 1.0;
     vec2 uv = vec2((float(i) + f.x) / float(W) + dome_cell_offset(l, W), (float(j) + f.y) / float(H));
     if (uv.x >= 1.0) uv.x -= 1.0;
     float jacobian;

@@ -155,42 +155,26 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
             conditional.extend(cdf(&row, *sum));
         }
     }
-    // The density inside a cell follows the lookup's luminance where it varies there.
+    // The density inside a cell follows the lookup's luminance where it varies there (a black
+    // map is sampled by solid angle above: uniform cells).
     let shape = if total > 0.0 && total.is_finite() {
         cell_shape(convention, texture.filter)
     } else {
         DOME_SHAPE_UNIFORM
     };
-    let (shape, nodes, nodes_width) = if shape == DOME_SHAPE_UNIFORM {
-        (shape, Vec::new(), 0)
+    let nodes = if shape == DOME_SHAPE_UNIFORM {
+        None
     } else {
-        let mut nodes = Vec::with_capacity((tw + 2) * (th + 2));
-        for jj in -1..=th as i64 {
-            for ii in -1..=tw as i64 {
-                // Mitsuba's lookup is periodic in u whatever the texture's wrap (as its cells above).
-                let i = match convention {
-                    DomeConvention::Mitsuba => ii.rem_euclid(tw as i64),
-                    _ => ii,
-                };
-                nodes.push(lum(i, jj) as f32);
-            }
-        }
-        // The cells whose luminance varies enough to pay for a shaped density say so by their
-        // first node's sign bit (the GPU takes every node's magnitude).
-        let flags: Vec<usize> = (0..h)
-            .flat_map(|j| (0..w).map(move |i| (i, j)))
-            .filter(|&(i, j)| cell_excess(shape, &nodes, tw + 2, i, j) > SHAPED_EXCESS)
-            .map(|(i, j)| (j + 1) * (tw + 2) + i + 1)
-            .collect();
-        if flags.is_empty() {
-            // A map smooth everywhere (no sun): uniform cells, and no nodes kept or uploaded.
-            (DOME_SHAPE_UNIFORM, Vec::new(), 0)
-        } else {
-            for k in flags {
-                nodes[k] = -nodes[k];
-            }
-            (shape, nodes, tw as u32 + 2)
-        }
+        // Mitsuba's lookup is periodic in u whatever the texture's wrap (as its cells above).
+        let periodic = convention == DomeConvention::Mitsuba;
+        shaped_nodes(shape, tw, th, (w, h), |i, j| {
+            lum(if periodic { i.rem_euclid(tw as i64) } else { i }, j)
+        })
+    };
+    // A map smooth everywhere (no sun) keeps uniform cells and no nodes.
+    let (shape, nodes_width, nodes) = match nodes {
+        Some(nodes) => (shape, tw as u32 + 2, nodes),
+        None => (DOME_SHAPE_UNIFORM, 0, Vec::new()),
     };
     let grand: f64 = row_sums.iter().sum();
     let marginal = cdf(&row_sums, grand);
@@ -219,6 +203,38 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
 /// nothing measurable: a smooth sky's cells vary by a few percent (excess ~1e-4), a sun's
 /// neighbours by factors (excess ~1).
 const SHAPED_EXCESS: f64 = 0.01;
+
+/// The luminance nodes of a `tw` x `th` map for cells of `shape` (`lum(i, j)` for i in -1 ..= tw,
+/// j in -1 ..= th, wrapped by the caller as the lookup wraps), with the sign bit set on the first
+/// node of each of the `cells` (columns, rows) whose luminance varies enough to pay for a shaped
+/// density (the GPU takes every node's magnitude); None when no cell does.
+fn shaped_nodes(
+    shape: u32,
+    tw: usize,
+    th: usize,
+    (w, h): (usize, usize),
+    lum: impl Fn(i64, i64) -> f64,
+) -> Option<Vec<f32>> {
+    let stride = tw + 2;
+    let mut nodes = Vec::with_capacity(stride * (th + 2));
+    for j in -1..=th as i64 {
+        for i in -1..=tw as i64 {
+            nodes.push(lum(i, j) as f32);
+        }
+    }
+    let flags: Vec<usize> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .filter(|&(i, j)| cell_excess(shape, &nodes, stride, i, j) > SHAPED_EXCESS)
+        .map(|(i, j)| (j + 1) * stride + i + 1)
+        .collect();
+    if flags.is_empty() {
+        return None;
+    }
+    for k in flags {
+        nodes[k] = -nodes[k];
+    }
+    Some(nodes)
+}
 
 /// The 3 x 3 nodes of cell (i, j) as `dome_cell()` in glsl/lights/infinite_lights.glsl reads
 /// them from `nodes` (row stride `stride`, texel (i, j) at `(j + 1) stride + i + 1`).

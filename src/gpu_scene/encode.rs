@@ -429,7 +429,6 @@ fn encode_textures(scene: &Scene) -> Vec<GpuTexture> {
     textures
 }
 
-/// Importance-sampling tables of a textured dome (a constant dome is sampled uniformly).
 /// Whether the scene's dome is textured with a lookup that varies inside its sampling cells (the
 /// kernels then hold the cells' shaped densities). Fixed by the texture and the convention, not
 /// by the light's colour, so that an edit of its colour keeps the kernels.
@@ -441,6 +440,8 @@ fn dome_shaped(scene: &Scene, dome_source: Option<(usize, DomeConvention)>) -> b
     })
 }
 
+/// Importance-sampling tables of a textured dome (a constant dome has none: it samples the
+/// cosine about the shading normal).
 fn dome_table(
     scene: &Scene,
     dome_source: Option<(usize, DomeConvention)>,
