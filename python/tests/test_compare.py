@@ -116,6 +116,8 @@ def test_ctrl_c_refuses_an_unfair_comparison_and_keeps_the_image(tmp_path):
     script = textwrap.dedent(f"""
         import os, signal, threading
         import illum
+        # As an interactive Python has it, even when started with SIGINT ignored (`&`).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         s = illum.Scene.from_dict({SCENE!r})
         threading.Timer(1.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
         try:

@@ -69,6 +69,9 @@ def test_ctrl_c_returns_the_samples_done():
         import json, os, signal, tempfile, threading
         import numpy as np
         import illum
+        # Python keeps SIGINT ignored when its parent ignored it (a job started with `&` by a
+        # non-interactive shell): install the handler an interactive Python has.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         s = illum.load({str(INTERIOR)!r})
         s.render(spp=1, width=32)  # kernels compiled before the clock starts
         threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
