@@ -43,6 +43,7 @@ def main():
     ap.add_argument("--illum", default="target/release/illum")
     ap.add_argument("--warmup", type=float, default=4.0)
     ap.add_argument("--seconds", type=float, default=6.0)
+    ap.add_argument("--dump", metavar="FILE", help="write the hot code, each instruction with its samples")
     ap.add_argument("args", nargs=argparse.REMAINDER, help="illum arguments (render SCENE ...)")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp()
@@ -52,9 +53,11 @@ def main():
         data = os.path.join(tmp, "perf.data")
         subprocess.run(["perf", "record", "-F", "1999", "-p", str(proc.pid), "-o", data, "--",
                         "sleep", str(a.seconds)], check=True, capture_output=True)
-        ips = subprocess.run(["perf", "script", "-i", data, "-F", "ip"], check=True,
-                             capture_output=True, text=True).stdout.split()
-        hot = collections.Counter(int(x, 16) for x in ips if x.startswith("7f"))
+        rows = subprocess.run(["perf", "script", "-i", data, "-F", "ip,dso"], check=True,
+                              capture_output=True, text=True).stdout.splitlines()
+        # JIT code belongs to no file: perf names it [unknown], //anon or its perf-PID.map.
+        jit = (r.split(None, 1) for r in rows if re.search(r"\[unknown\]|//anon|perf-\d+\.map", r))
+        hot = collections.Counter(int(f[0], 16) for f in jit)
         if not hot:
             sys.exit("profile-jit: no samples in JIT code: the render finished, or was still compiling its\n"
                      "kernels (a new build compiles them cold: run once before, or raise --warmup)")
@@ -70,7 +73,11 @@ def main():
         cmd = ["gdb", "-p", str(proc.pid), "-batch"]
         for lo, hi in ranges:
             cmd += ["-ex", "disassemble 0x%x,0x%x" % (lo - 64, hi + 16)]
-        dis = subprocess.run(cmd, capture_output=True, text=True).stdout
+        gdb = subprocess.run(cmd, capture_output=True, text=True)
+        dis = gdb.stdout
+        if "Cannot access memory" in gdb.stderr:
+            print("profile-jit: gdb could not read some of the code:", gdb.stderr.strip().splitlines()[-1],
+                  file=sys.stderr)
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()
@@ -97,6 +104,10 @@ def main():
             if m:
                 arrays[m.group(1)] += n
                 break
+    if a.dump:
+        with open(a.dump, "w") as f:
+            for x in order:
+                f.write("%6d %x: %s\n" % (hot.get(x, 0), x, code[x]))
     print("%d samples in JIT code" % total)
     for k, n in kinds.most_common():
         print("  %-16s %5.1f%%" % (k, 100.0 * n / total))
