@@ -15,6 +15,7 @@
 #include "direct/direct.glsl"
 #include "indirect/indirect.glsl"
 #include "film/film.glsl"
+#include "shared/profile.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
 layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
@@ -54,6 +55,7 @@ void main() {
     GpuMaterial m;
     Shading sh;
     uint mask;
+    PROF_START();
     while (k < samples) {
         if (depth == 0u) {
             sample_index = pc.first_sample + k;
@@ -64,9 +66,16 @@ void main() {
             first_diffuse = false;
             mask = MASK_GEOMETRY | MASK_LIGHTS;
             depth = 1u;
+            PROF(PROF_CAMERA_RAY);
         }
+        // Set afresh each iteration: otherwise the vertex's material and frame are carried
+        // around the loop on the paths that leave them unset (spilled every iteration).
+        m = no_material();
+        sh = no_shading();
+        PROF(PROF_BOUNCE);
         Hit h = trace_closest(o, d, 0.0, INF, mask);
         rays += 1u;
+        if (depth == 1u) PROF(PROF_CAMERA_TRACE); else PROF(PROF_BOUNCE_TRACE);
         bool go = true;
         bool shade = true;
         if (depth == 1u) {
@@ -82,6 +91,7 @@ void main() {
                 sh = shading_at(s, m, d);
             }
         }
+        if (depth == 1u) PROF(PROF_CAMERA_SHADE); else PROF(PROF_BOUNCE_SHADE);
         if (go) {
             vec3 dl = shade ? direct_lighting(sh, m, rng, rays) : vec3(0.0);
             if (depth == 1u) direct = film_clamp(dl, acc);
@@ -100,6 +110,7 @@ void main() {
                 mask = MASK_OCCLUDERS;
             }
         }
+        PROF(PROF_BOUNCE);
         if (go) {
             depth += 1u;
             continue;
@@ -111,10 +122,12 @@ void main() {
         if (first_diffuse) a_indirect.rgb += rest; else a_reflection.rgb += rest;
         k += 1u;
         depth = 0u;
+        PROF(PROF_FILM);
     }
     acc.beauty_sq.w += float(rays);
     film[slot] = acc;
     aovs[slot * AOV_PLANES + AOV_DIRECT] = a_direct;
     aovs[slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;
     aovs[slot * AOV_PLANES + AOV_REFLECTION] = a_reflection;
+    PROF_END(frame.profile, slot);
 }

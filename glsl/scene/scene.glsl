@@ -25,6 +25,11 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Tex
 
 GpuInstance get_instance(uint i) { return InstanceRef(frame.instances).v[i]; }
 GpuMaterial get_material(uint i) { return MaterialRef(frame.materials).v[i]; }
+// All zero: a loop's per-iteration material before its hit sets it (path.comp).
+GpuMaterial no_material() {
+    GpuLobe z = GpuLobe(vec4(0.0), vec4(0.0), vec2(0.0), 0u, 0u);
+    return GpuMaterial(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u, 0u, 0u, 0.0, 0.0, vec4(0.0), GpuLobe[2](z, z));
+}
 GpuShape get_shape(uint i) { return ShapeRef(frame.shapes).v[i]; }
 GpuLight get_light(uint i) { return LightRef(frame.lights).v[i]; }
 

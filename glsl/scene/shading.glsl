@@ -19,6 +19,9 @@ struct Shading {
     uint self_light;   // the light whose surface p lies on (emissive shapes), else NONE
 };
 
+// All zero: a loop's per-iteration frame before its hit sets it (path.comp).
+Shading no_shading() { return Shading(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0u); }
+
 // The shading frame at a surface hit by a ray of direction d. Patches `m` where its parameters
 // vary per texel (glTF metallic-roughness).
 Shading shading_at(Surface s, inout GpuMaterial m, vec3 d) {
