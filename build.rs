@@ -19,6 +19,7 @@ fn main() {
     let glsl = root.join("glsl");
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=build/kernels.rs");
+    println!("cargo:rerun-if-env-changed=ILLUM_PROFILE_KERNELS");
 
     let mut sources = Vec::new();
     kernels::collect(&glsl, &mut sources);

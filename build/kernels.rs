@@ -33,7 +33,11 @@ pub fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
 /// Includes are paths from `glsl`. Panics (failing the build) with every compiler message.
 pub fn compile_kernels(glsl: &Path, sources: &[PathBuf], out: &Path, header: &str) -> String {
     let compiler = shaderc::Compiler::new().expect("shaderc: cannot create a compiler");
-    let mut index = format!("{header}\n");
+    let mut index = format!(
+        "{header}\n/// Whether the kernels time their regions (ILLUM_PROFILE_KERNELS=1 at build time).\n\
+         pub const PROFILED: bool = {};\n",
+        profiled()
+    );
     let mut failures = Vec::new();
     let mut kernels: Vec<&PathBuf> = sources
         .iter()
@@ -55,7 +59,19 @@ pub fn compile_kernels(glsl: &Path, sources: &[PathBuf], out: &Path, header: &st
                 .find(|(n, _)| *n == variant)
                 .unwrap_or_else(|| panic!("{}: unknown variant {variant}", kernel.display()))
                 .1;
-            match compile(&compiler, glsl, kernel, &text, defines) {
+            let mut defines = defines.to_vec();
+            // The kernels that time their regions also compile that way in every build, so
+            // the measurement build cannot rot unseen.
+            if profiled() {
+                defines.push("ILLUM_PROFILE");
+            } else if text.contains("PROF_START()") {
+                let mut timed = defines.clone();
+                timed.push("ILLUM_PROFILE");
+                if let Err(msg) = compile(&compiler, glsl, kernel, &text, &timed) {
+                    failures.push(format!("with ILLUM_PROFILE: {msg}"));
+                }
+            }
+            match compile(&compiler, glsl, kernel, &text, &defines) {
                 Ok(words) => {
                     let name = format!("{stem}.{variant}.spv");
                     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
@@ -78,6 +94,12 @@ pub fn compile_kernels(glsl: &Path, sources: &[PathBuf], out: &Path, header: &st
         panic!("GLSL compilation failed:\n{}", failures.join("\n"));
     }
     index
+}
+
+/// Whether the kernels time their regions (glsl/shared/profile.glsl): `ILLUM_PROFILE_KERNELS=1
+/// cargo build`, for measurement only.
+pub fn profiled() -> bool {
+    std::env::var("ILLUM_PROFILE_KERNELS").is_ok_and(|v| v == "1")
 }
 
 pub fn compile(

@@ -49,6 +49,7 @@
 #include "direct/mis.glsl"
 #include "direct/shadow.glsl"
 #include "direct/control_variates.glsl"
+#include "shared/profile.glsl"
 
 uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     // A textured dome (a sky with its sun) varies far more over its directions than any other
@@ -331,6 +332,7 @@ void direct_trace(DirectPlan plan, Shading sh, ShadowRay ray, inout DirectGroup 
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) {
     if (frame.light_count == 0u) return vec3(0.0);
     DirectPlan plan = direct_plan(sh, m);
+    PROF(PROF_DIRECT_PLAN);
     vec3 result = vec3(0.0);
     DirectGroup grp;
     grp.g = 0u;
@@ -342,22 +344,27 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
     ShadowRay ray;
     while (grp.g < plan.groups) {
         if (!grp.opened) direct_open(plan, sh, grp, rng);
+        PROF(PROF_DIRECT_OPEN);
         ray.on = false;
         if (group.flushing && !shadow_flush_next(group, cands, ray)) {
             result += group.part;
             if (shadow_flush_done(group)) cands[group.n++] = group.hold;
         }
+        PROF(PROF_DIRECT_FLUSH);
         if (!group.flushing) {
             ShadowCandidate x = no_shadow_candidate();
             uint step = direct_step(grp);
             if (step == DIRECT_SAMPLE) {
                 grp.j += 1u;
+                PROF(PROF_DIRECT_LOOP);
                 if (grp.g < plan.rounds) {
                     x = direct_light_sample(plan, sh, m, grp, ray, rng);
+                    PROF(PROF_LIGHT_SAMPLE);
                 } else {
                     grp.crossed = direct_brdf_sample(sh, m, grp.g - plan.rounds - 1u, grp.j - 1u, grp.count, rng, grp.bdir, ids);
                     grp.q = 0u;
                     if (grp.crossed > 0u) step = DIRECT_CROSS;
+                    PROF(PROF_BRDF_SAMPLE);
                 }
             } else if (step == DIRECT_CLOSE) {
                 grp.closed = true;
@@ -367,7 +374,11 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
                 grp.g += 1u;
                 grp.opened = false;
             }
-            if (step == DIRECT_CROSS) x = direct_brdf_light(plan, sh, grp.bdir, ids[grp.q++]);
+            if (step == DIRECT_CROSS) {
+                PROF(PROF_DIRECT_LOOP);
+                x = direct_brdf_light(plan, sh, grp.bdir, ids[grp.q++]);
+                PROF(PROF_BRDF_SAMPLE);
+            }
             uint joins = shadow_candidate(ray, x, group.n, rng);
             if (joins == SHADOW_FULL) {
                 shadow_flush_start(group, cands, rng);
@@ -377,8 +388,11 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
                 cands[group.n++] = x;
             }
         }
+        PROF(PROF_DIRECT_CANDIDATES);
         if (ray.on) direct_trace(plan, sh, ray, grp, group, result, rays);
+        PROF(PROF_SHADOW_TRACE);
     }
+    PROF(PROF_DIRECT_LOOP);
     return result;
 }
 

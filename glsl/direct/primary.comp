@@ -7,6 +7,7 @@
 #include "trace/trace.glsl"
 #include "direct/direct.glsl"
 #include "film/film.glsl"
+#include "shared/profile.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
 layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
@@ -22,23 +23,30 @@ void main() {
     FilmPixel acc = film[slot];
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint samples = film_sample_count(pc, pixel);
+    PROF_START();
     for (uint k = 0u; k < samples; ++k) {
         uint sample_index = pc.first_sample + k;
         Rng rng;
         vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);
         vec3 o = frame.cam_origin.xyz;
+        PROF(PROF_CAMERA_RAY);
         Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
         rays += 1u;
+        PROF(PROF_CAMERA_TRACE);
         vec3 beauty = vec3(0.0);
         vec3 le;   // emission seen directly
         GpuMaterial m;
         Shading sh;
-        if (film_camera_hit(h, o, d, acc, le, m, sh)) {
+        bool lit = film_camera_hit(h, o, d, acc, le, m, sh);
+        PROF(PROF_CAMERA_SHADE);
+        if (lit) {
             beauty += film_clamp(direct_lighting(sh, m, rng, rays), acc);
         }
         beauty += le;
         film_add(acc, sample_index, beauty, le);
+        PROF(PROF_FILM);
     }
     acc.beauty_sq.w += float(rays);
     film[slot] = acc;
+    PROF_END(frame.profile, slot);
 }

@@ -26,6 +26,8 @@
 #define BINDING_AOVS 4
 // Floats of one AOV plane's sums at a pixel (its vec4), as the host reads them.
 #define AOV_CHANNELS 4
+// Regions of the kernel profile (glsl/shared/profile.glsl; kernels built with ILLUM_PROFILE).
+#define PROFILE_REGIONS 20
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
 #define BINDING_IMAGE 5   // the host's storage image (glsl/film/resolve_image.comp)
@@ -256,8 +258,8 @@ struct Frame {
     uint light_floor;         // fewest samples a looped light takes (light_count_for; 0 or 1: the
                               // course's rule alone)
     uint frame_pad0;          // std430 sizes structs with a vec4 in 16-byte steps
-    uint frame_pad1;
-    uint frame_pad2;
+    uint64_t profile;         // uint64 per PROFILE_REGIONS region per film slot: time by region
+                              // in kernels built with ILLUM_PROFILE (shared/profile.glsl; 0: none)
 };
 
 // Per-dispatch constants.

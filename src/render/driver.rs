@@ -308,6 +308,8 @@ pub struct Blocking<'a> {
     /// dispatches take the pixels (Frame.pixel_order) and the pilot's pixels, the window and the
     /// ring around it (src/render/adaptive.rs).
     pub adaptive: Option<(&'a Buffer, &'a Buffer, Window)>,
+    /// Time by kernel region (builds that measure it; src/render/profile.rs).
+    pub profile: Option<&'a super::profile::Profile>,
     /// The image's height.
     pub height: u32,
     /// Wall seconds spent for the render before its first seed (the allocation pilot): the
@@ -473,6 +475,9 @@ impl Blocking<'_> {
 
     /// The render's output after the samples done: the block in progress joins the sums.
     pub fn finish(&self, mut p: Progress) -> Result<SeedOutput> {
+        if let Some(profile) = self.profile {
+            crate::note!("{}", profile.report(self.ctx)?);
+        }
         let end = p.first + p.done;
         // Adaptive sampling stopped every pixel: none of the range is left undone.
         let stopped = p.stop.is_some_and(|s| end >= s) && !p.interrupted;

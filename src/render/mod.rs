@@ -15,6 +15,7 @@ mod integrator;
 mod params;
 mod prepared;
 mod probe;
+mod profile;
 mod progressive;
 mod run;
 mod session;

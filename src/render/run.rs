@@ -20,6 +20,8 @@ pub struct Run {
     timer: Option<crate::vk::GpuTimer>,
     /// With adaptive sampling: Frame.pixel_ends, Frame.pixel_order and the pilot's window.
     adaptive: Option<(Buffer, Buffer, Window)>,
+    /// Time by kernel region, in builds whose kernels measure it (src/render/profile.rs).
+    profile: Option<super::profile::Profile>,
     pub warmup_seconds: f64,
     per_dispatch: u32,
     loop_limited: bool,
@@ -78,6 +80,10 @@ impl Run {
             }
             None => None,
         };
+        let profile = super::profile::Profile::new(ctx, film_window.pixels() as usize)?;
+        if let Some(p) = &profile {
+            setup.frame.profile = p.address();
+        }
         let frame = ctx.upload(
             "frame",
             std::slice::from_ref(&setup.frame),
@@ -110,6 +116,7 @@ impl Run {
             film,
             timer,
             adaptive,
+            profile,
             warmup_seconds,
             per_dispatch,
             loop_limited,
@@ -134,6 +141,7 @@ impl Run {
             per_dispatch: self.per_dispatch,
             loop_limited: self.loop_limited,
             adaptive: self.adaptive.as_ref().map(|(e, o, pilot)| (e, o, *pilot)),
+            profile: self.profile.as_ref(),
             height: self.height,
             head_start: std::cell::Cell::new(0.0),
         }

@@ -338,10 +338,19 @@ impl Context {
             if stats {
                 exts.push(ash::khr::pipeline_executable_properties::NAME.as_ptr());
             }
+            // Kernels built to time their regions read the device clock (glsl/shared/profile.glsl).
+            let mut fclock =
+                vk::PhysicalDeviceShaderClockFeaturesKHR::default().shader_device_clock(true);
+            if crate::shaders::PROFILED {
+                exts.push(ash::khr::shader_clock::NAME.as_ptr());
+            }
             let base = vk::PhysicalDeviceFeatures::default().shader_int64(true);
             let mut f2 = vk::PhysicalDeviceFeatures2::default()
                 .features(base)
                 .push_next(&mut f12);
+            if crate::shaders::PROFILED {
+                f2 = f2.push_next(&mut fclock);
+            }
             if rq {
                 f2 = f2.push_next(&mut fas).push_next(&mut frq);
             }
