@@ -80,7 +80,7 @@ impl Run {
             }
             None => None,
         };
-        let profile = super::profile::Profile::new(ctx, film_window.pixels() as usize)?;
+        let profile = super::profile::Profile::new(ctx, film_window.pixels())?;
         if let Some(p) = &profile {
             setup.frame.profile = p.address();
         }
