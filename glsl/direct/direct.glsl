@@ -125,8 +125,8 @@ bool stratify_rows(GpuLight l, GpuDomeSampling dome) { return l.kind == LIGHT_DO
 // What every sample of one direct_lighting() call shares: the settings, the dome's tables, the
 // light selection and the groups' layout. Samples come in groups, in this order: the light
 // samples of each round (a looped light, or one pick from the tree or the scan), a closing group
-// (the picks' resampling), then the BRDF samples of each lobe (the specular ones, then the diffuse
-// lobe where it is BRDF-sampled).
+// (the picks' resampling, with FEATURE_SHADOW_RESAMPLE), then the BRDF samples of each lobe (the
+// specular ones, then the diffuse lobe where it is BRDF-sampled).
 struct DirectPlan {
     uint technique;
     uint n_max;            // most light samples per light
@@ -138,6 +138,7 @@ struct DirectPlan {
     uint rounds;           // light rounds
     uint lobes;            // specular lobes (BRDF group `lobes` is the diffuse lobe)
     bool diffuse_brdf;     // whether the diffuse lobe takes BRDF samples
+    uint first_brdf;       // the first lobe's group (after the closing group, if any)
     uint groups;
 };
 
@@ -153,7 +154,12 @@ DirectPlan direct_plan(Shading sh, GpuMaterial m) {
     plan.rounds = plan.technique == TECHNIQUE_BRDF ? 0u : plan.looped + (lights_picked(plan.sel) ? plan.n_max : 0u);
     plan.lobes = min(m.lobe_count, 2u);
     plan.diffuse_brdf = plan.technique == TECHNIQUE_BRDF || plan.diffuse_mis;
-    plan.groups = plan.rounds + 1u + (plan.technique == TECHNIQUE_LIGHT ? 0u : plan.lobes + 1u);
+    // Only groups with something to do: the closing group where picks may wait for resampling,
+    // the diffuse lobe's where it takes BRDF samples (each group costs every lane at least one
+    // pass through direct_lighting()'s loop).
+    bool closing = has_feature(FEATURE_SHADOW_RESAMPLE) && plan.technique != TECHNIQUE_BRDF;
+    plan.first_brdf = plan.rounds + (closing ? 1u : 0u);
+    plan.groups = plan.first_brdf + (plan.technique == TECHNIQUE_LIGHT ? 0u : plan.lobes + (plan.diffuse_brdf ? 1u : 0u));
     return plan;
 }
 
@@ -216,10 +222,10 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
     grp.crossed = grp.q = 0u;
     if (grp.g < plan.rounds) {
         direct_open_light_round(plan, sh, grp, rng);
-    } else if (grp.g == plan.rounds) {
-        grp.close = plan.technique != TECHNIQUE_BRDF;
+    } else if (grp.g < plan.first_brdf) {
+        grp.close = true;
     } else {
-        bool diffuse = grp.g - plan.rounds - 1u == plan.lobes;
+        bool diffuse = grp.g - plan.first_brdf == plan.lobes;
         if (!diffuse || (plan.diffuse_brdf && max(sh.albedo.r, max(sh.albedo.g, sh.albedo.b)) > 0.0)) {
             grp.count = plan.n_b;
             grp.close = true;
@@ -361,7 +367,7 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
                     x = direct_light_sample(plan, sh, m, grp, ray, rng);
                     PROF(PROF_LIGHT_SAMPLE);
                 } else {
-                    grp.crossed = direct_brdf_sample(sh, m, grp.g - plan.rounds - 1u, grp.j - 1u, grp.count, rng, grp.bdir, ids);
+                    grp.crossed = direct_brdf_sample(sh, m, grp.g - plan.first_brdf, grp.j - 1u, grp.count, rng, grp.bdir, ids);
                     grp.q = 0u;
                     if (grp.crossed > 0u) step = DIRECT_CROSS;
                     PROF(PROF_BRDF_SAMPLE);
@@ -369,7 +375,12 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
             } else if (step == DIRECT_CLOSE) {
                 grp.closed = true;
                 if (grp.close) shadow_group_end(group, cands, rng);
-            } else if (step == DIRECT_END) {
+                // With no flush to wait for (no resampling, or nothing waiting) the group ends
+                // in this iteration: its rays are all traced, and an iteration saved is a pass
+                // of every lane through the loop's body.
+                if (!group.flushing) step = DIRECT_END;
+            }
+            if (step == DIRECT_END) {
                 if (grp.cv) result += control_variate(sh, grp.l, plan.dome, float(grp.count), grp.cv_sv, grp.cv_so, grp.cv_vis, grp.cv_tr);
                 grp.g += 1u;
                 grp.opened = false;
