@@ -24,11 +24,30 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Tex
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer TexelRef { vec4 v[]; };
 
 GpuInstance get_instance(uint i) { return InstanceRef(frame.instances).v[i]; }
-GpuMaterial get_material(uint i) { return MaterialRef(frame.materials).v[i]; }
 // All zero: a loop's per-iteration material before its hit sets it (path.comp).
 GpuMaterial no_material() {
     GpuLobe z = GpuLobe(vec4(0.0), vec4(0.0), vec2(0.0), 0u, 0u);
     return GpuMaterial(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u, 0u, 0u, 0.0, 0.0, vec4(0.0), GpuLobe[2](z, z));
+}
+// Material i. The lobes a material does not have are not read (zero): each word read is a gather
+// of every lane on lavapipe, and the lobes are 24 of a material's 44 words.
+GpuMaterial get_material(uint i) {
+    MaterialRef r = MaterialRef(frame.materials);
+    GpuMaterial m = no_material();
+    m.diffuse = r.v[i].diffuse;
+    m.diffuse_texture = r.v[i].diffuse_texture;
+    m.emission = r.v[i].emission;
+    m.emission_texture = r.v[i].emission_texture;
+    m.tangent_dir = r.v[i].tangent_dir;
+    m.flags = r.v[i].flags;
+    m.lobe_count = r.v[i].lobe_count;
+    m.metallic_roughness_texture = r.v[i].metallic_roughness_texture;
+    m.roughness = r.v[i].roughness;
+    m.dielectric_f0 = r.v[i].dielectric_f0;
+    m.base_metallic = r.v[i].base_metallic;
+    if (m.lobe_count > 0u) m.lobes[0] = r.v[i].lobes[0];
+    if (m.lobe_count > 1u) m.lobes[1] = r.v[i].lobes[1];
+    return m;
 }
 GpuShape get_shape(uint i) { return ShapeRef(frame.shapes).v[i]; }
 GpuLight get_light(uint i) { return LightRef(frame.lights).v[i]; }
