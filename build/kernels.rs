@@ -185,7 +185,8 @@ pub fn check_pieces(glsl: &Path, sources: &[PathBuf]) {
         .iter()
         .map(|name| (name.clone(), kernel(&mut std::iter::once(name))))
         .collect();
-    cases.push(("every piece".into(), kernel(&mut pieces.iter())));
+    let every = kernel(&mut pieces.iter());
+    cases.push(("every piece".into(), every.clone()));
     cases.push((
         "every piece, reversed".into(),
         kernel(&mut pieces.iter().rev()),
@@ -197,6 +198,13 @@ pub fn check_pieces(glsl: &Path, sources: &[PathBuf]) {
             if let Err(e) = compile(&compiler, glsl, &name, text, defines) {
                 failures.push(e);
             }
+        }
+        // The pieces as a measurement build compiles them (glsl/shared/profile.glsl).
+        let mut timed = defines.to_vec();
+        timed.push("ILLUM_PROFILE");
+        let name = glsl.join(format!("every piece with ILLUM_PROFILE ({variant})"));
+        if let Err(e) = compile(&compiler, glsl, &name, &every, &timed) {
+            failures.push(e);
         }
     }
     assert!(

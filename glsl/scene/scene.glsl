@@ -24,7 +24,8 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Tex
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer TexelRef { vec4 v[]; };
 
 GpuInstance get_instance(uint i) { return InstanceRef(frame.instances).v[i]; }
-// All zero: a loop's per-iteration material before its hit sets it (path.comp).
+// All zero: what get_material() fills in, and path.comp's per-iteration material before a hit
+// sets it.
 GpuMaterial no_material() {
     GpuLobe z = GpuLobe(vec4(0.0), vec4(0.0), vec2(0.0), 0u, 0u);
     return GpuMaterial(vec3(0.0), 0u, vec3(0.0), 0u, vec3(0.0), 0u, 0u, 0u, 0.0, 0.0, vec4(0.0), GpuLobe[2](z, z));

@@ -26,8 +26,27 @@
 #define BINDING_AOVS 4
 // Floats of one AOV plane's sums at a pixel (its vec4), as the host reads them.
 #define AOV_CHANNELS 4
-// Regions of the kernel profile (glsl/shared/profile.glsl; kernels built with ILLUM_PROFILE).
+// Regions of the kernel profile (glsl/shared/profile.glsl; kernels built with ILLUM_PROFILE),
+// by index; src/render/profile.rs names them.
 #define PROFILE_REGIONS 20
+#define PROF_CAMERA_RAY 0
+#define PROF_CAMERA_TRACE 1
+#define PROF_CAMERA_SHADE 2
+#define PROF_DIRECT_PLAN 3
+#define PROF_LIGHT_SAMPLE 4
+#define PROF_BRDF_SAMPLE 5
+#define PROF_SHADOW_TRACE 6
+#define PROF_DIRECT_LOOP 7
+#define PROF_FILM 8
+#define PROF_BOUNCE_TRACE 9
+#define PROF_BOUNCE_SHADE 10
+#define PROF_BOUNCE 11
+#define PROF_OTHER 12
+#define PROF_DIRECT_OPEN 13
+#define PROF_DIRECT_FLUSH 14
+#define PROF_DIRECT_CANDIDATES 15
+// An empty span: what a mark itself costs (the host subtracts it from every region).
+#define PROF_EMPTY 16
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
 #define BINDING_IMAGE 5   // the host's storage image (glsl/film/resolve_image.comp)

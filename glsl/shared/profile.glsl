@@ -4,33 +4,17 @@
 //
 // PROF(r) adds the device clock's time since the previous mark to region r, and counts the mark:
 // a mark ends the region the code before it belongs to. What a mark costs itself (a clock read)
-// is measured on empty spans at the start (PROF_EMPTY) and taken off each region per mark. The clock is read once per SIMD group on lavapipe, so a
-// region is charged what the group spent in it, divergent lanes included; every invocation adds
-// the same figure, and the host compares shares, not absolute times.
+// is measured on empty spans at the start (PROF_EMPTY) and taken off each region per mark. The
+// clock is read once per SIMD group on lavapipe, so a region is charged what the group spent in
+// it, divergent lanes included; every invocation adds the same figure, and the host compares
+// shares, not absolute times. Only primary.comp and path.comp report (PROF_START .. PROF_END);
+// the marks direct_lighting() makes inside full.comp are read and dropped.
 #ifndef ILLUM_PROFILE_GLSL
 #define ILLUM_PROFILE_GLSL
 
 #include "shared/layout.glsl"
 
-// Regions (the host's names: src/render/profile.rs).
-#define PROF_CAMERA_RAY 0
-#define PROF_CAMERA_TRACE 1
-#define PROF_CAMERA_SHADE 2
-#define PROF_DIRECT_PLAN 3
-#define PROF_LIGHT_SAMPLE 4
-#define PROF_BRDF_SAMPLE 5
-#define PROF_SHADOW_TRACE 6
-#define PROF_DIRECT_LOOP 7
-#define PROF_FILM 8
-#define PROF_BOUNCE_TRACE 9
-#define PROF_BOUNCE_SHADE 10
-#define PROF_BOUNCE 11
-#define PROF_OTHER 12
-#define PROF_DIRECT_OPEN 13
-#define PROF_DIRECT_FLUSH 14
-#define PROF_DIRECT_CANDIDATES 15
-// An empty span: what a mark itself costs (the host subtracts it from every region).
-#define PROF_EMPTY 16
+// The regions (PROF_*) are numbered in shared/layout.glsl, where the host reads them too.
 
 #ifdef ILLUM_PROFILE
 #extension GL_EXT_shader_realtime_clock : require

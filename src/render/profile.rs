@@ -4,33 +4,38 @@
 //! time of their own (docs/performance-kernels.md, "Kernel regions").
 
 use crate::error::Result;
-use crate::layout::PROFILE_REGIONS;
+use crate::layout::*;
 use crate::vk::{Buffer, Context};
 use ash::vk;
 
-/// The regions' names, by their index in glsl/shared/profile.glsl.
-pub const REGIONS: &[&str] = &[
-    "camera ray",
-    "camera trace",
-    "camera hit shading and AOVs",
-    "direct: plan",
-    "direct: light samples",
-    "direct: BRDF samples",
-    "direct: shadow traversal",
-    "direct: sample step, and waiting for the group's other lanes",
-    "film",
-    "bounce: trace",
-    "bounce: hit shading",
-    "bounce: continuation",
-    "other",
-    "direct: opening a group",
-    "direct: resampling flush",
-    "direct: candidates (closing groups, joining the resampling)",
-    "empty",
+/// The regions' names, by their index (glsl/shared/layout.glsl numbers them).
+const REGIONS: &[(u32, &str)] = &[
+    (PROF_CAMERA_RAY, "camera ray"),
+    (PROF_CAMERA_TRACE, "camera trace"),
+    (PROF_CAMERA_SHADE, "camera hit shading and AOVs"),
+    (PROF_DIRECT_PLAN, "direct: plan"),
+    (PROF_LIGHT_SAMPLE, "direct: light samples"),
+    (PROF_BRDF_SAMPLE, "direct: BRDF samples"),
+    (PROF_SHADOW_TRACE, "direct: shadow traversal"),
+    (
+        PROF_DIRECT_LOOP,
+        "direct: sample step, and waiting for the group's other lanes",
+    ),
+    (PROF_FILM, "film"),
+    (PROF_BOUNCE_TRACE, "bounce: trace"),
+    (PROF_BOUNCE_SHADE, "bounce: hit shading"),
+    (PROF_BOUNCE, "bounce: continuation"),
+    (PROF_OTHER, "other"),
+    (PROF_DIRECT_OPEN, "direct: opening a group"),
+    (PROF_DIRECT_FLUSH, "direct: resampling flush"),
+    (
+        PROF_DIRECT_CANDIDATES,
+        "direct: candidates (closing groups, joining the resampling)",
+    ),
 ];
 
 /// The region of empty spans: what one mark costs.
-const EMPTY: usize = 16;
+const EMPTY: usize = PROF_EMPTY as usize;
 
 /// Per film slot, one uint64 per region of time, then one of marks, summed over the kernels'
 /// invocations.
@@ -88,7 +93,10 @@ impl Profile {
             100.0 * (raw - total) / raw.max(1.0)
         );
         for (r, t) in rows {
-            let name = REGIONS.get(r).copied().unwrap_or("?");
+            let name = REGIONS
+                .iter()
+                .find(|(i, _)| *i as usize == r)
+                .map_or("?", |(_, name)| name);
             out.push_str(&format!(
                 "\n  {:>5.1}%  {name} ({:.1} marks per invocation)",
                 100.0 * t / total.max(1.0),
@@ -96,5 +104,24 @@ impl Profile {
             ));
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_region_has_one_name_and_a_slot() {
+        let mut seen = std::collections::HashSet::new();
+        for &(r, name) in REGIONS {
+            assert!(
+                r < PROFILE_REGIONS && r as usize != EMPTY,
+                "{name}: region {r}"
+            );
+            assert!(seen.insert(r), "{name}: region {r} named twice");
+        }
+        // Every index up to the empty spans' is named.
+        assert_eq!(seen.len(), EMPTY);
     }
 }
