@@ -361,16 +361,25 @@ fn the_mouse_orbits_and_r_brings_the_scene_camera_back() {
         xdotool(&["mousemove", "--window", &id, &to, "110"]);
     }
     xdotool(&["mouseup", "1"]);
-    v.wait_for("8 spp done");
-    xdotool(&["key", "s"]);
-    v.wait_for("saved");
+    // Saves once the view holds all 8 samples of the camera it shows: a "done" line may be a late
+    // one of the camera before (motion events can still arrive after it), and a key pressed then
+    // saves a restarted accumulation.
+    let save_complete = |v: &mut Viewer| {
+        for _ in 0..10 {
+            v.wait_for("8 spp done");
+            xdotool(&["key", "s"]);
+            if v.wait_for("saved").contains("(8 spp)") {
+                return;
+            }
+        }
+        panic!("never saved 8 spp:\n{}", v.log.join("\n"));
+    };
+    save_complete(&mut v);
     let (exr, _) = render(&scene, 8, "orbit-render");
     let moved = read(&saved);
     assert_ne!(beauty(&moved), beauty(&exr), "the orbit moved the camera");
     xdotool(&["key", "r"]);
-    v.wait_for("8 spp done");
-    xdotool(&["key", "s"]);
-    v.wait_for("saved");
+    save_complete(&mut v);
     assert_same_pixels(&read(&saved), &exr, "saved after R");
     xdotool(&["key", "q"]);
     let (code, log) = v.wait();
