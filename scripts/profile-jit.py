@@ -70,14 +70,17 @@ def main():
                 lo = x
             hi = x
         ranges.append((lo, hi))
-        cmd = ["gdb", "-p", str(proc.pid), "-batch"]
+        # One gdb call a range, from no lower than its first page (the mapping may start
+        # there): gdb gives up on the commands after one that cannot read.
+        dis = ""
         for lo, hi in ranges:
-            cmd += ["-ex", "disassemble 0x%x,0x%x" % (lo - 64, hi + 16)]
-        gdb = subprocess.run(cmd, capture_output=True, text=True)
-        dis = gdb.stdout
-        if "Cannot access memory" in gdb.stderr:
-            print("profile-jit: gdb could not read some of the code:", gdb.stderr.strip().splitlines()[-1],
-                  file=sys.stderr)
+            gdb = subprocess.run(["gdb", "-p", str(proc.pid), "-batch", "-ex",
+                                  "disassemble 0x%x,0x%x" % (max(lo - 64, lo & ~0xfff), hi + 16)],
+                                 capture_output=True, text=True)
+            dis += gdb.stdout
+            if "Cannot access memory" in gdb.stderr:
+                print("profile-jit: gdb could not read 0x%x-0x%x:" % (lo, hi),
+                      gdb.stderr.strip().splitlines()[-1], file=sys.stderr)
     finally:
         proc.send_signal(signal.SIGKILL)
         proc.wait()

@@ -2,7 +2,8 @@
 // A brute-force unidirectional path tracer, the reference the radiosity cache is measured
 // against (Mitsuba 3's and pbrt-v4's `path`): at every vertex direct lighting by
 // direct_lighting() (light and BRDF samples combined by MIS, as at the camera hit), then one
-// continuation from the lobes (indirect.glsl), Russian roulette from the third bounce on.
+// continuation from the lobes (indirect.glsl), Russian roulette from the fifth vertex on (Mitsuba
+// 3's rr_depth 5: docs/indirect.md says what the third cost).
 // frame.max_depth counts path segments as Mitsuba's max_depth does: 1 = emission seen directly,
 // 2 = direct lighting, NONE = unbounded. AOVs: Direct (emission seen directly and direct lighting
 // at the camera hit), IndirectDiffuse and Reflection (paths whose first bounce took the diffuse
@@ -104,7 +105,7 @@ void main() {
             if (go) {
                 if (depth == 1u) first_diffuse = b.diffuse;
                 thr *= b.weight;
-                if (depth >= 3u) go = russian_roulette(thr, rng);
+                if (depth >= 5u) go = russian_roulette(thr, rng);
                 o = sh.origin;
                 d = b.wi;
                 mask = MASK_OCCLUDERS;
