@@ -60,6 +60,12 @@ impl Profile {
         self.buffer.address
     }
 
+    /// Starts the sums afresh (each of a pilot's candidates, each restart of a view).
+    pub fn clear(&self, ctx: &Context) -> Result<()> {
+        let zeros = vec![0u64; self.slots * 2 * PROFILE_REGIONS as usize];
+        Ok(ctx.write(&self.buffer, 0, &zeros)?)
+    }
+
     /// Each region's share of the time summed so far, largest first, after taking off what its
     /// marks cost (the empty spans' time per mark).
     pub fn report(&self, ctx: &Context) -> Result<String> {

@@ -162,11 +162,17 @@ impl Run {
                 camera.width, camera.height, self.width, self.height
             )));
         }
-        let (ends, order) = (self.setup.frame.pixel_ends, self.setup.frame.pixel_order);
+        // What the run owns, not the scene or the settings: kept across the new frame.
+        let frame = &self.setup.frame;
+        let (ends, order, profile) = (frame.pixel_ends, frame.pixel_order, frame.profile);
         self.setup
             .configure(ctx, prepared, camera, settings, Schedule::Progressive)?;
-        (self.setup.frame.pixel_ends, self.setup.frame.pixel_order) = (ends, order);
+        let frame = &mut self.setup.frame;
+        (frame.pixel_ends, frame.pixel_order, frame.profile) = (ends, order, profile);
         ctx.write(&self.frame, 0, std::slice::from_ref(&self.setup.frame))?;
+        if let Some(p) = &self.profile {
+            p.clear(ctx)?;
+        }
         film::clear(ctx, self.film.device())
     }
 
