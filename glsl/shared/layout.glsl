@@ -28,7 +28,6 @@
 #define AOV_CHANNELS 4
 // Regions of the kernel profile (glsl/shared/profile.glsl; kernels built with ILLUM_PROFILE),
 // by index; src/render/profile.rs names them.
-#define PROFILE_REGIONS 20
 #define PROF_CAMERA_RAY 0
 #define PROF_CAMERA_TRACE 1
 #define PROF_CAMERA_SHADE 2
@@ -47,6 +46,8 @@
 #define PROF_DIRECT_CANDIDATES 15
 // An empty span: what a mark itself costs (the host subtracts it from every region).
 #define PROF_EMPTY 16
+// Regions counted: every one above, the empty spans' the last.
+#define PROFILE_REGIONS 17
 #define BINDING_TLAS 2
 #define BINDING_BVH 3
 #define BINDING_IMAGE 5   // the host's storage image (glsl/film/resolve_image.comp)

@@ -37,6 +37,11 @@ const REGIONS: &[(u32, &str)] = &[
 /// The region of empty spans: what one mark costs.
 const EMPTY: usize = PROF_EMPTY as usize;
 
+/// The buffer's words for `slots` film slots, all zero.
+fn zeros(slots: usize) -> Vec<u64> {
+    vec![0; slots * 2 * PROFILE_REGIONS as usize]
+}
+
 /// Per film slot, one uint64 per region of time, then one of marks, summed over the kernels'
 /// invocations.
 pub struct Profile {
@@ -50,9 +55,8 @@ impl Profile {
         if !crate::shaders::PROFILED {
             return Ok(None);
         }
-        let zeros = vec![0u64; slots * 2 * PROFILE_REGIONS as usize];
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        let buffer = ctx.upload("kernel profile", &zeros, usage)?;
+        let buffer = ctx.upload("kernel profile", &zeros(slots), usage)?;
         Ok(Some(Profile { buffer, slots }))
     }
 
@@ -62,8 +66,7 @@ impl Profile {
 
     /// Starts the sums afresh (each of a pilot's candidates, each restart of a view).
     pub fn clear(&self, ctx: &Context) -> Result<()> {
-        let zeros = vec![0u64; self.slots * 2 * PROFILE_REGIONS as usize];
-        Ok(ctx.write(&self.buffer, 0, &zeros)?)
+        Ok(ctx.write(&self.buffer, 0, &zeros(self.slots))?)
     }
 
     /// Each region's share of the time summed so far, largest first, after taking off what its
@@ -127,7 +130,8 @@ mod tests {
             );
             assert!(seen.insert(r), "{name}: region {r} named twice");
         }
-        // Every index up to the empty spans' is named.
+        // Every index up to the empty spans' is named, and the empty spans' is the last.
         assert_eq!(seen.len(), EMPTY);
+        assert_eq!(PROFILE_REGIONS as usize, EMPTY + 1);
     }
 }
