@@ -5,6 +5,9 @@
 use std::path::Path;
 use std::process::Command;
 
+#[path = "common/scratch.rs"]
+mod scratch;
+
 /// Compiles the C program `source` (relative to the repository) against include/illum.h,
 /// examples/embed_host.h and libillum.a into a temporary directory; returns the executable.
 fn compile(source: &str, name: &str) -> std::path::PathBuf {
@@ -19,8 +22,7 @@ fn compile(source: &str, name: &str) -> std::path::PathBuf {
          first (scripts/test.sh does)",
         lib.display()
     );
-    let dir = std::env::temp_dir().join(format!("illum-capi-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch::scratch_root();
     let program = dir.join(name);
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     let compiled = Command::new(&cc)
@@ -103,7 +105,7 @@ fn the_c_example_runs() {
 #[test]
 fn the_committed_header_is_current() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let fresh = std::env::temp_dir().join(format!("illum-{}.h", std::process::id()));
+    let fresh = scratch::scratch_root().join("illum.h");
     let Ok(out) = Command::new("cbindgen")
         .current_dir(root)
         .args([

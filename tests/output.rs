@@ -8,15 +8,14 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use exr::prelude::{AnyChannel, AnyChannels, FlatSamples, Image, WritableImage};
 use illum::output::{ExrImage, Film, ImageMetadata, read_exr, write_exr, write_png};
 
-/// A fresh path in the temp dir, removed on drop.
+/// A fresh path in the process's scratch folder, removed on drop.
 struct TempFile(PathBuf);
 
 impl TempFile {
     fn new(tag: &str, ext: &str) -> TempFile {
         static COUNTER: AtomicU32 = AtomicU32::new(0);
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let name = format!("illum-output-{}-{n}-{tag}.{ext}", std::process::id());
-        TempFile(std::env::temp_dir().join(name))
+        TempFile(common::scratch_root().join(format!("output-{n}-{tag}.{ext}")))
     }
 }
 
@@ -370,7 +369,7 @@ fn png_keeps_row_order() {
 
 #[test]
 fn errors_name_the_file() {
-    let dir = std::env::temp_dir().join(format!("illum-output-missing-dir-{}", std::process::id()));
+    let dir = common::scratch_root().join("missing-dir");
     let exr_path = dir.join("out.exr");
     let png_path = dir.join("out.png");
     let film = film(true);

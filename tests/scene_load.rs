@@ -6,20 +6,19 @@
 mod gltf_files;
 #[path = "scene_load/invalid.rs"]
 mod invalid;
+#[path = "common/scratch.rs"]
+mod scratch;
 
 use glam::{DMat4, DVec3, Vec2, Vec3, Vec4};
 use illum::scene::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
 
-/// A fresh, empty directory under the system temp dir.
+/// A fresh, empty directory in this process's scratch folder (tests/common/scratch.rs).
 pub fn temp_dir(tag: &str) -> PathBuf {
     static N: AtomicU32 = AtomicU32::new(0);
     let n = N.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("illum-scene-{tag}-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    scratch::scratch_dir(&format!("scene-{tag}-{n}"))
 }
 
 pub const CAMERA: &str =

@@ -16,9 +16,7 @@ pub fn illum_cli(args: &[&str]) -> (i32, String) {
     )
 }
 
-/// A unique path in the temporary directory.
+/// A unique path in this process's scratch folder (scratch.rs).
 pub fn temp_path(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("illum-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    super::scratch::scratch_root().join(name)
 }
