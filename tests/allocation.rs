@@ -1,4 +1,4 @@
-//! The measured sample allocation (src/render/allocation.rs, docs/allocation.md): every
+//! The measured sample allocation (src/render/allocation/, docs/allocation.md): every
 //! allocation the pilot can choose is unbiased (a closed form); the pilot raises the floor
 //! under one small light and keeps the course's share rule with many lights, where extra
 //! samples cost more than they remove; it picks lights from the light tree under small

@@ -7,7 +7,7 @@
 // Conventions:
 // * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
 //   `share` its solid angle over the hemisphere's 2 pi (1 for the dome), N_L in [floor, N_max]
-//   (floor 1 unless the allocation pilot raised it, src/render/allocation.rs); a
+//   (floor 1 unless the allocation pilot raised it, src/render/allocation/); a
 //   textured dome takes 8 N_max (measured at equal time, light_count_for). With the light tree
 //   (LIGHT_SELECT_TREE: above DIRECT_LOOP_LIGHTS lights, or where the allocation pilot chose it),
 //   the infinite lights are still looped over that way and N_max samples are spread over the finite lights, each picking a light by descending the
@@ -57,7 +57,7 @@ uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     // 0.76x the relMSE at equal time of 2 N_max on scenes/bench/dome.json, dome-occluders.json
     // and mitsuba-dome.json (docs/performance-sampling.md, "The dome's sample count again").
     if (l.kind == LIGHT_DOME && l.texture != NONE) return frame.dome_samples * n_max;
-    // The floor (src/render/allocation.rs) lifts small lights above their share when a pilot
+    // The floor (src/render/allocation/) lifts small lights above their share when a pilot
     // measured that it pays: the share alone gives every small light one sample.
     return clamp(uint(ceil(light_share(l, p) * float(n_max))), clamp(frame.light_floor, 1u, n_max), n_max);
 }

@@ -53,7 +53,7 @@ impl std::str::FromStr for Technique {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSelection {
     /// A loop up to DIRECT_LOOP_LIGHTS lights, the tree above; where both can run, the
-    /// allocation pilot measures which costs less (src/render/allocation.rs).
+    /// allocation pilot measures which costs less (src/render/allocation/).
     #[default]
     Auto,
     /// Descend the light tree (docs/techniques.md, "The light tree"): O(log n) per sample.
@@ -155,7 +155,7 @@ pub struct DirectLighting {
     pub control_variates: ControlVariates,
     /// Whether the counts above are used as given (fixed, the default of a value built in code,
     /// which names its counts) or are where an allocation pilot starts (auto: the `direct`
-    /// integrator's default when its parameters are parsed; src/render/allocation.rs).
+    /// integrator's default when its parameters are parsed; src/render/allocation/).
     pub allocation: AllocationMode,
 }
 

@@ -1,5 +1,5 @@
-//! The seam between the driver (src/render/driver.rs: budget, passes, tiles, film blocks,
-//! progress, cancel, evaluation) and the integrators (src/integrators), which turn camera samples
+//! The seam between the driver (src/render/driver.rs: set-up and tiles; blocking.rs: budget,
+//! passes, film blocks, progress, cancel, evaluation) and the integrators (src/integrators), which turn camera samples
 //! into film sums. The driver knows no integrator: the settings hold one, which writes its frame
 //! constants, creates its kernels and has them record each dispatch.
 
@@ -46,7 +46,7 @@ pub trait Integrator: Send + Sync + std::fmt::Debug {
     /// Itself, for its kernels to read its parameters.
     fn as_any(&self) -> &dyn std::any::Any;
     /// Whether its direct-lighting counts are to be measured by a pilot before it renders
-    /// (src/render/allocation.rs), starting from the counts its `configure` writes.
+    /// (src/render/allocation/), starting from the counts its `configure` writes.
     fn measured_allocation(&self) -> bool {
         false
     }

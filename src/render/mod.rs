@@ -9,6 +9,7 @@
 pub mod adaptive;
 pub mod allocation;
 mod bands;
+mod blocking;
 mod driver;
 pub mod film_kernel;
 mod integrator;
@@ -101,7 +102,11 @@ pub struct RenderStats {
 
 impl RenderStats {
     /// The figures of one seed's render (set-up and total times are the caller's).
-    fn of(prepared: &PreparedScene, setup: &driver::Setup, o: &driver::SeedOutput) -> RenderStats {
+    fn of(
+        prepared: &PreparedScene,
+        setup: &driver::Setup,
+        o: &blocking::SeedOutput,
+    ) -> RenderStats {
         let r = &o.resolved;
         RenderStats {
             upload_seconds: prepared.upload_seconds,

@@ -4,7 +4,7 @@
 //! is the blocking render's at `spp` = N bit for bit (the device sums each block's samples in
 //! index order whatever the steps, and blocks leave it into the same exact host sums).
 
-use super::driver::{Blocking, Progress};
+use super::blocking::{Blocking, Progress};
 use super::run::Run;
 use super::{PreparedScene, RenderOutput, RenderSettings, Renderer};
 use crate::error::Result;

@@ -1,8 +1,9 @@
-//! What a render sets up once for all its seeds (src/render/driver.rs runs them): the
+//! What a render sets up once for all its seeds (src/render/blocking.rs runs them): the
 //! integrator's kernels and frame constants, the device film, the timer, adaptive sampling's
 //! buffers.
 
-use super::driver::{Blocking, FilmBuffers, SeedOutput, Setup, TILE, check_memory, check_trace};
+use super::blocking::{Blocking, SeedOutput};
+use super::driver::{FilmBuffers, Setup, TILE, check_memory, check_trace};
 use super::{PreparedScene, RenderSettings, Schedule};
 use crate::error::{Error, Result};
 use crate::film::{self, FILM_BLOCK, Window};

@@ -50,7 +50,7 @@ pub struct RenderSettings {
     /// src/render/adaptive.rs).
     pub adaptive: Option<super::adaptive::Adaptive>,
     /// Direct lighting's sample counts as decided (by the allocation pilot,
-    /// src/render/allocation.rs), written over the integrator's; None: the integrator's own, or
+    /// src/render/allocation/), written over the integrator's; None: the integrator's own, or
     /// measured first when the integrator asks for that.
     pub allocation: Option<super::allocation::Allocation>,
 }
