@@ -292,7 +292,9 @@ struct PassConstants {
                           // `order`: first entry of Frame.pixel_order, entries, and the grid's
                           // width and height that cover them
     uint order;           // 1: the dispatch takes pixels from Frame.pixel_order, else the tile
-    uint pad0;
+    uint row_step;        // workgroup row r of the dispatch covers the tile's row (r row_step) mod
+                          // rows (coprime to them; 0: in order), so that each of the equal ranges
+                          // of workgroups lavapipe gives its threads spans the whole tile
     uint pad1;
     uint pad2;
 };

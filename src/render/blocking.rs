@@ -5,7 +5,7 @@
 //! sessions.
 
 use super::RenderSettings;
-use super::driver::{FilmBuffers, SUBMIT_SECONDS, Setup, packed, tiles};
+use super::driver::{FilmBuffers, SUBMIT_SECONDS, Setup, interleaves_rows, packed, tiles};
 use crate::error::Result;
 use crate::film::{self, Window};
 use crate::vk::{Buffer, Context};
@@ -301,7 +301,7 @@ impl Blocking<'_> {
         while s < t.min_spp {
             let n = self.per_dispatch.min(t.min_spp - s);
             let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
-            let dispatches = tiles(ring, s, n, seed);
+            let dispatches = tiles(ring, s, n, seed, interleaves_rows(self.ctx));
             self.ctx.one_shot(|cmd| {
                 for pc in &dispatches {
                     kernels.record(cmd, pc)
@@ -388,8 +388,8 @@ impl Blocking<'_> {
             // The integrator's own state (a cache generation) may end a dispatch early.
             let n = kernels.begin(self.ctx, seed, s, n)?.clamp(1, n);
             let dispatches = match active {
-                Some(a) => packed(a, s, n, seed),
-                None => tiles(self.window, s, n, seed),
+                Some(a) => packed(a, s, n, seed, interleaves_rows(self.ctx)),
+                None => tiles(self.window, s, n, seed, interleaves_rows(self.ctx)),
             };
             // Every tile (or pack) of these samples in one submission: they write disjoint
             // pixels, so no barrier stands between them (IntegratorPasses::record).

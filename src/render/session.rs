@@ -52,7 +52,7 @@
 //! (between frames) to warm it for the new view, after which the images equal the blocking
 //! render's through the new camera again.
 
-use super::driver::{FilmBuffers, Setup, tiles};
+use super::driver::{FilmBuffers, Setup, interleaves_rows, tiles};
 use super::{PreparedScene, RenderSettings, Renderer, SceneUpdate, Schedule};
 use crate::error::{Error, Result};
 use crate::film::{FILM_BLOCK, Window};
@@ -357,7 +357,13 @@ impl RenderSession<'_> {
             let mut s = pass.first_sample;
             while s < end {
                 let n = self.per_dispatch.min(end - s);
-                for pc in tiles(Window::full(w, h), s, n, self.settings.seed) {
+                for pc in tiles(
+                    Window::full(w, h),
+                    s,
+                    n,
+                    self.settings.seed,
+                    interleaves_rows(&self.ctx),
+                ) {
                     kernels.record(cmd, &pc);
                 }
                 barrier(dev, cmd);
