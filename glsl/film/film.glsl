@@ -20,7 +20,7 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Pix
 // Frame.pixel_order (adaptive sampling packs the pixels still sampling, so that no lane idles
 // beside a pixel that takes many more samples). False when the invocation has none. With
 // p.row_step the workgroup rows take the tile's rows (or the pack's) interleaved: lavapipe gives
-// each thread an equal contiguous range of workgroups (src/render/driver.rs, interleaves_rows).
+// each thread an equal contiguous range of workgroups (src/render/film_kernel.rs, interleaves_rows).
 bool film_pixel(PassConstants p, out uvec2 pix, out uint pixel) {
     uvec2 local = gl_GlobalInvocationID.xy;
     if (p.row_step > 1u) {

@@ -70,10 +70,19 @@ struct FullPixel {
     uint base;
 };
 
+// The update pass's invocation: its block (xy) and update index (z), its workgroup rows
+// interleaved on lavapipe as the film pass's are (film_pixel).
+uvec3 update_id() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (pc.update.row_step > 1u)
+        id.y = (gl_WorkGroupID.y * pc.update.row_step) % gl_NumWorkGroups.y * WORKGROUP_Y + gl_LocalInvocationID.y;
+    return id;
+}
+
 // The invocation's pixel and its sums, or its path with its records cleared; false when it has
 // none (outside the tile, or beyond the blocks).
 bool full_begin(bool update, out FullPixel px) {
-    uvec3 id = gl_GlobalInvocationID;
+    uvec3 id = update_id();
     if (update) {
         uint block = pc.update.block;
         uvec2 blocks = (uvec2(frame.width, frame.height) + block - 1u) / block;
@@ -137,7 +146,7 @@ struct FullPath {
 FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, out Rng rng) {
     FullPath p;
     if (update) {
-        uvec3 id = gl_GlobalInvocationID;
+        uvec3 id = update_id();
         uint block = pc.update.block;
         rng = rng_init(pc.film.seed_lo ^ 0x5bd1e995u, pc.film.seed_hi, px.path, pc.update.index + id.z);
         vec2 size = vec2(frame.width, frame.height);

@@ -570,7 +570,7 @@ struct RadiosityPass {
                               // belongs to, or a warm-up round; z counts consecutive indices
     uint vertices;            // records per path
     uint block;               // one path per block x block pixels (gl_GlobalInvocationID.xy)
-    uint pad0;
+    uint row_step;            // as PassConstants.row_step, over the dispatch's workgroup rows
 };
 
 // The passes of the full integrator's one kernel (FullPass.mode): the driver compiles the code

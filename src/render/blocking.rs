@@ -5,7 +5,8 @@
 //! sessions.
 
 use super::RenderSettings;
-use super::driver::{FilmBuffers, SUBMIT_SECONDS, Setup, interleaves_rows, packed, tiles};
+use super::driver::{FilmBuffers, SUBMIT_SECONDS, Setup, packed, tiles};
+use super::film_kernel::interleaves_rows;
 use crate::error::Result;
 use crate::film::{self, Window};
 use crate::vk::{Buffer, Context};

@@ -1,6 +1,6 @@
 //! What every integrator's film kernel shares: its pipeline over film pixels (frame constants,
 //! film, AOV planes, trace structure), its binding to a render's buffers and its dispatch over a
-//! tile.
+//! tile, its workgroup rows interleaved on lavapipe.
 
 use super::PreparedScene;
 use crate::error::Result;
@@ -61,4 +61,74 @@ pub fn tile_groups(tile: [u32; 4]) -> [u32; 3] {
         tile[3].div_ceil(WORKGROUP_Y),
         1,
     ]
+}
+
+/// Whether a device runs a dispatch's workgroups in equal contiguous ranges, one per thread
+/// (lavapipe): its dispatches then interleave their rows (PassConstants.row_step), else the
+/// thread with the cheaper rows idles (measured in docs/performance-kernels.md, "Rows
+/// interleaved between lavapipe's threads"). Other drivers schedule workgroups as they go.
+pub fn interleaves_rows(ctx: &Context) -> bool {
+    ctx.0.info.driver_id == vk::DriverId::MESA_LLVMPIPE
+}
+
+/// The step between the tile rows that consecutive workgroup rows of a dispatch cover (see
+/// PassConstants.row_step): the integer nearest rows / phi coprime to `rows`, so that any run of
+/// consecutive workgroup rows spreads over the tile like a golden-ratio sequence.
+pub fn row_step(rows: u32) -> u32 {
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut s = ((f64::from(rows) * 0.618_034).round() as u32).max(1);
+    while gcd(s, rows) != 1 {
+        s += 1;
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gcd(a: u32, b: u32) -> u32 {
+        if b == 0 { a } else { gcd(b, a % b) }
+    }
+
+    /// The interleaved rows are a permutation, and each of T equal contiguous ranges of workgroup
+    /// rows (lavapipe's split between T threads) covers every half and quarter of the tile in
+    /// proportion, within 1 + log2(rows) rows: the discrepancy bound of the golden-ratio sequence
+    /// the step follows (it grows as log N).
+    #[test]
+    fn interleaved_rows_spread_each_thread_over_the_tile() {
+        for rows in 1..=512u32 {
+            let s = row_step(rows);
+            assert_eq!(gcd(s, rows), 1, "rows {rows}: step {s}");
+            let order: Vec<u32> = (0..rows).map(|r| r * s % rows).collect();
+            let mut seen = order.clone();
+            seen.sort_unstable();
+            assert!(
+                seen.iter().copied().eq(0..rows),
+                "rows {rows}: not a permutation"
+            );
+            let bound = 1.0 + f64::from(rows).log2();
+            for threads in [2u32, 4, 8] {
+                for t in 0..threads {
+                    let part =
+                        &order[(t * rows / threads) as usize..((t + 1) * rows / threads) as usize];
+                    for q in [2u32, 4] {
+                        for k in 0..q {
+                            let inside = part.iter().filter(|&&r| r * q / rows == k).count() as f64;
+                            let dev = (inside - part.len() as f64 / f64::from(q)).abs();
+                            assert!(
+                                dev <= bound,
+                                "rows {rows}, {threads} threads, range {t}, {q}ths {k}: {dev}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

@@ -52,7 +52,8 @@
 //! (between frames) to warm it for the new view, after which the images equal the blocking
 //! render's through the new camera again.
 
-use super::driver::{FilmBuffers, Setup, interleaves_rows, tiles};
+use super::driver::{FilmBuffers, Setup, tiles};
+use super::film_kernel::interleaves_rows;
 use super::{PreparedScene, RenderSettings, Renderer, SceneUpdate, Schedule};
 use crate::error::{Error, Result};
 use crate::film::{FILM_BLOCK, Window};

@@ -39,7 +39,7 @@
 
 use crate::error::{Error, Result};
 use crate::layout::*;
-use crate::render::film_kernel::tile_groups;
+use crate::render::film_kernel::{interleaves_rows, row_step, tile_groups};
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
 use ash::vk;
 use std::cell::{self, RefCell};
@@ -323,11 +323,15 @@ impl RadiosityCache {
                 index,
                 vertices: VERTICES,
                 block: s.block,
-                pad0: 0,
+                row_step: 0,
             },
         };
         // One invocation per block (x, y) and update index (z), in film-kernel workgroups.
         let [gx, gy, _] = tile_groups([0, 0, s.blocks[0], s.blocks[1]]);
+        let mut pc = pc;
+        if interleaves_rows(ctx) {
+            pc.update.row_step = row_step(gy);
+        }
         let dispatched = Instant::now();
         ctx.one_shot(|cmd| {
             kernel.dispatch(cmd, bytemuck::bytes_of(&pc), [gx, gy, rounds]);
