@@ -16,17 +16,20 @@
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelEndRef { uint v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelOrderRef { uint v[]; };
 
+// The invocation's y in its dispatch, the workgroup rows interleaved by `row_step`
+// (PassConstants.row_step; 0 or 1: in order): lavapipe gives each thread an equal contiguous
+// range of workgroups (src/render/film_kernel.rs, interleaves_rows).
+uint interleaved_invocation_y(uint row_step) {
+    if (row_step <= 1u) return gl_GlobalInvocationID.y;
+    return (gl_WorkGroupID.y * row_step) % gl_NumWorkGroups.y * WORKGROUP_Y + gl_LocalInvocationID.y;
+}
+
 // The invocation's pixel in dispatch p: of its tile, or with p.order entry p.tile.x + k of
 // Frame.pixel_order (adaptive sampling packs the pixels still sampling, so that no lane idles
-// beside a pixel that takes many more samples). False when the invocation has none. With
-// p.row_step the workgroup rows take the tile's rows (or the pack's) interleaved: lavapipe gives
-// each thread an equal contiguous range of workgroups (src/render/film_kernel.rs, interleaves_rows).
+// beside a pixel that takes many more samples), the rows interleaved by p.row_step. False when
+// the invocation has none.
 bool film_pixel(PassConstants p, out uvec2 pix, out uint pixel) {
-    uvec2 local = gl_GlobalInvocationID.xy;
-    if (p.row_step > 1u) {
-        uint rows = (p.tile.w + WORKGROUP_Y - 1u) / WORKGROUP_Y;
-        local.y = (gl_WorkGroupID.y * p.row_step) % rows * WORKGROUP_Y + gl_LocalInvocationID.y;
-    }
+    uvec2 local = uvec2(gl_GlobalInvocationID.x, interleaved_invocation_y(p.row_step));
     if (local.x >= p.tile.z || local.y >= p.tile.w) return false;
     if (p.order != 0u) {
         uint k = local.y * p.tile.z + local.x;

@@ -71,12 +71,9 @@ struct FullPixel {
 };
 
 // The update pass's invocation: its block (xy) and update index (z), its workgroup rows
-// interleaved on lavapipe as the film pass's are (film_pixel).
+// interleaved as the film pass's are (film.glsl).
 uvec3 update_id() {
-    uvec3 id = gl_GlobalInvocationID;
-    if (pc.update.row_step > 1u)
-        id.y = (gl_WorkGroupID.y * pc.update.row_step) % gl_NumWorkGroups.y * WORKGROUP_Y + gl_LocalInvocationID.y;
-    return id;
+    return uvec3(gl_GlobalInvocationID.x, interleaved_invocation_y(pc.update.row_step), gl_GlobalInvocationID.z);
 }
 
 // The invocation's pixel and its sums, or its path with its records cleared; false when it has

@@ -3,7 +3,7 @@
 //! integrator's kernels, the frame constants, the device film, the warm-up dispatch — and split
 //! each dispatch into the same tiles, so that embedding and the command line cannot drift.
 
-use super::film_kernel::row_step;
+use super::film_kernel::tile_row_step;
 use super::{Integrator, IntegratorPasses, PreparedScene, RenderSettings, Schedule};
 use crate::error::{Error, Result};
 use crate::film::{self, AOV_CHANNELS, Window};
@@ -266,11 +266,7 @@ pub fn tiles(
                 seed_lo: seed as u32,
                 seed_hi: (seed >> 32) as u32,
                 tile,
-                row_step: if interleave {
-                    row_step(tile[3].div_ceil(WORKGROUP_Y))
-                } else {
-                    0
-                },
+                row_step: tile_row_step(interleave, tile),
                 ..Default::default()
             });
         }
@@ -294,18 +290,15 @@ pub fn packed(
         .step_by(most as usize)
         .map(|offset| {
             let n = most.min(count - offset);
+            let tile = [offset, n, PACKED_WIDTH, n.div_ceil(PACKED_WIDTH)];
             PassConstants {
                 first_sample: first,
                 sample_count: samples,
                 seed_lo: seed as u32,
                 seed_hi: (seed >> 32) as u32,
-                tile: [offset, n, PACKED_WIDTH, n.div_ceil(PACKED_WIDTH)],
+                tile,
                 order: 1,
-                row_step: if interleave {
-                    row_step(n.div_ceil(PACKED_WIDTH).div_ceil(WORKGROUP_Y))
-                } else {
-                    0
-                },
+                row_step: tile_row_step(interleave, tile),
                 ..Default::default()
             }
         })

@@ -71,6 +71,17 @@ pub fn interleaves_rows(ctx: &Context) -> bool {
     ctx.0.info.driver_id == vk::DriverId::MESA_LLVMPIPE
 }
 
+/// PassConstants.row_step (or RadiosityPass's) of a dispatch over `tile` (its workgroups
+/// [`tile_groups`]): rows interleaved where the device runs workgroups in contiguous ranges
+/// ([`interleaves_rows`]), else 0 (in order).
+pub fn tile_row_step(interleave: bool, tile: [u32; 4]) -> u32 {
+    if interleave {
+        row_step(tile_groups(tile)[1])
+    } else {
+        0
+    }
+}
+
 /// The step between the tile rows that consecutive workgroup rows of a dispatch cover (see
 /// PassConstants.row_step): the integer nearest rows / phi coprime to `rows`, so that any run of
 /// consecutive workgroup rows spreads over the tile like a golden-ratio sequence.

@@ -39,7 +39,7 @@
 
 use crate::error::{Error, Result};
 use crate::layout::*;
-use crate::render::film_kernel::{interleaves_rows, row_step, tile_groups};
+use crate::render::film_kernel::{interleaves_rows, tile_groups, tile_row_step};
 use crate::vk::{Buffer, ComputePipeline, Context, MemoryLocation};
 use ash::vk;
 use std::cell::{self, RefCell};
@@ -310,6 +310,9 @@ impl RadiosityCache {
         rounds: u32,
     ) -> Result<()> {
         let s = self.shape;
+        // One invocation per block (x, y) and update index (z), in film-kernel workgroups.
+        let blocks = [0, 0, s.blocks[0], s.blocks[1]];
+        let [gx, gy, _] = tile_groups(blocks);
         let pc = FullPass {
             film: PassConstants {
                 seed_lo: seed as u32,
@@ -323,15 +326,9 @@ impl RadiosityCache {
                 index,
                 vertices: VERTICES,
                 block: s.block,
-                row_step: 0,
+                row_step: tile_row_step(interleaves_rows(ctx), blocks),
             },
         };
-        // One invocation per block (x, y) and update index (z), in film-kernel workgroups.
-        let [gx, gy, _] = tile_groups([0, 0, s.blocks[0], s.blocks[1]]);
-        let mut pc = pc;
-        if interleaves_rows(ctx) {
-            pc.update.row_step = row_step(gy);
-        }
         let dispatched = Instant::now();
         ctx.one_shot(|cmd| {
             kernel.dispatch(cmd, bytemuck::bytes_of(&pc), [gx, gy, rounds]);
