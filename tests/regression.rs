@@ -30,11 +30,12 @@ const SCENE: &str = r#"{"camera": {"position": [0, 1.2, 3], "look_at": [0, 0.3, 
 /// the origin to the surface, the hit moved onto the sphere by that distance, and hit distances
 /// summed in a unit of 2^-24 (huge spheres, glsl/trace/shapes.glsl): another. The constant
 /// dome's light samples cosine-weighted about the normal instead of uniform over the sphere
-/// (glsl/lights/infinite_lights.glsl): another.
+/// (glsl/lights/infinite_lights.glsl): another. A group of 2^m light or BRDF samples drawing its
+/// points from one dimension pair (glsl/direct/direct.glsl `group_u`): another.
 const KNOWN: &[(&str, &str, &str)] = &[
-    ("Mesa 25.", "bvh", "643d71ed0cc20d28"),
-    ("Mesa 25.", "rayquery", "643d71ed0cc20d28"),
-    ("Mesa 22.", "bvh", "643d71ed0cc20d28"),
+    ("Mesa 25.", "bvh", "39f81a1e80f17fab"),
+    ("Mesa 25.", "rayquery", "39f81a1e80f17fab"),
+    ("Mesa 22.", "bvh", "39f81a1e80f17fab"),
 ];
 
 fn film_hash(f: &illum::output::Film) -> String {

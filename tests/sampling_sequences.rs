@@ -95,6 +95,72 @@ fn camera_streams_are_scrambled_sobol_nets() {
     assert_no_validation_messages(&ctx);
 }
 
+/// A group of 2^s light or BRDF samples at one shading point (glsl/direct/direct.glsl `group_u`:
+/// `rng_sobol2_group`, one dimension pair for the group): each camera sample's group is a net
+/// (one point in every elementary interval of area 2^-s, so every row, column and grid-cell
+/// stratum holds one), and across a pixel's camera samples the groups stay stratified at every
+/// prefix, as the pair's own sequence is.
+#[test]
+fn groups_of_samples_are_nets_and_stratified_across_camera_samples() {
+    let ctx = context();
+    let k = Kernel::new(&ctx, "rng_check", illum_test_kernels::RNG_CHECK_PLAIN);
+    const S: u32 = 3;
+    const M: u32 = 15;
+    let group = 1usize << S;
+    for (seed, pixel, pair) in [(7u32, 99u32, 4u32), (0x1234_5678, 70_000, 9)] {
+        // Camera samples 0, 2, 4, …: the even sequence, in order, each with its group.
+        let inputs: Vec<[u32; 4]> = (0..1u32 << (M - S))
+            .flat_map(|c| {
+                (0..group as u32).map(move |j| [seed, pixel, 2 * c, pair | j << 8 | S << 24])
+            })
+            .collect();
+        let out = draw(&k, &inputs);
+        let cells = |pts: &[[f32; 4]], cols: u32, rows: u32| -> Vec<u32> {
+            let mut count = vec![0u32; (cols * rows) as usize];
+            for o in pts {
+                count[(((o[1] * rows as f32) as u32) * cols + (o[0] * cols as f32) as u32)
+                    as usize] += 1;
+            }
+            count
+        };
+        for (c, g) in out.chunks(group).enumerate() {
+            for a in 0..=S {
+                let count = cells(g, 1 << a, 1 << (S - a));
+                assert!(
+                    count.iter().all(|&n| n == 1),
+                    "seed {seed} pixel {pixel}: camera sample {c}'s group is not a net in {} x {} intervals",
+                    1 << a,
+                    1 << (S - a)
+                );
+            }
+        }
+        // The first n camera samples' groups: floor(n 2^s / 2^m) or one more point in each
+        // interval of area 2^-m, for every m and shape.
+        for n in [1usize, 3, 44, 1000, (1 << (M - S)) - 1] {
+            let pts = &out[..n * group];
+            for m in 0..=M {
+                let q = (pts.len() >> m) as u32;
+                for a in 0..=m {
+                    let count = cells(pts, 1 << a, 1 << (m - a));
+                    assert!(
+                        count.iter().all(|&c| c == q || c == q + 1),
+                        "seed {seed} pixel {pixel}: the first {n} camera samples' groups are not stratified in {} x {} intervals",
+                        1 << a,
+                        1 << (m - a)
+                    );
+                }
+            }
+        }
+        // Each point is uniform over pixels (the scrambles): point 3 of camera sample 10.
+        let inputs: Vec<[u32; 4]> = (0..1u32 << 16)
+            .map(|p| [seed, p, 10, pair | 3 << 8 | S << 24])
+            .collect();
+        let pts: Vec<(f32, f32)> = draw(&k, &inputs).iter().map(|o| (o[0], o[1])).collect();
+        chi2_uniform_2d("group point 3 at camera sample 10", &pts, 16);
+    }
+    assert_no_validation_messages(&ctx);
+}
+
 #[test]
 fn camera_streams_are_uniform_and_independent() {
     let ctx = context();

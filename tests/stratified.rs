@@ -1,6 +1,8 @@
-//! Stratified samples (glsl/direct/direct.glsl `stratify`): the light samples of a light and the
-//! BRDF samples of a lobe at a shading point are jittered within the cells of a grid (n strata
-//! of a textured dome's rows, its columns in a randomly shifted Latin order). Each estimator
+//! Stratified samples (glsl/direct/direct.glsl `group_u`): the light samples of a light and the
+//! BRDF samples of a lobe at a shading point, 2^m of them one block of a dimension pair's Sobol
+//! points (a net within the group, stratified across camera samples), other counts jittered
+//! within the cells of a grid (`stratify`: n strata of a textured dome's rows, its columns in a
+//! randomly shifted Latin order). Each estimator
 //! alone must stay unbiased, so each is checked against a closed form with several samples per
 //! group: light samples only and BRDF samples only on a Lambert floor under a large rect light
 //! (the polygon formula), and light samples only under a textured dome (Gauss-Legendre
@@ -42,7 +44,8 @@ fn check(b: &Batches, irradiance: impl Fn(DVec3) -> f64) {
 #[test]
 fn stratified_light_and_brdf_samples_match_the_polygon_formula() {
     // A 4 x 4 rect 0.4 above the floor: from the floor under it, share = solid angle / 2 pi is
-    // about 0.8, so 4 light samples (a 2 x 2 grid) where the default N_max is 4, 3 (3 x 1) at 3.
+    // about 0.8, so 4 light samples (one block of 4 points) where the default N_max is 4, 3
+    // (a 3 x 1 grid) at 3.
     let (l, h, s) = (2.0, 0.4, 2.0);
     let irradiance = square_light_irradiance(l, h, s);
     let scene = scene(&scene_json(
@@ -95,12 +98,15 @@ fn stratified_dome_samples_match_the_quadrature_of_the_map() {
     let e = dome_irradiance_quadrature(texture, rotation_deg, convention, DVec3::Y)
         * DVec3::new(radiance.x.into(), radiance.y.into(), radiance.z.into());
     assert!(e.min_element() > 0.0);
-    let integrator = Direct(DirectLighting {
-        technique: Technique::Light,
-        // A textured dome takes 8 N_max samples: 32 row strata.
-        light_samples: 4,
-        ..Default::default()
-    });
-    let b = render_batches_with(&scene, integrator, 256, 6);
-    assert_matches_expectation(&b, |_| (ALBEDO * e / PI).to_array(), 0.01);
+    // A textured dome takes 8 N_max samples: 32 (one block of points) at N_max 4, 24 row strata
+    // with shifted columns at 3.
+    for light_samples in [4, 3] {
+        let integrator = Direct(DirectLighting {
+            technique: Technique::Light,
+            light_samples,
+            ..Default::default()
+        });
+        let b = render_batches_with(&scene, integrator, 256, 6);
+        assert_matches_expectation(&b, |_| (ALBEDO * e / PI).to_array(), 0.01);
+    }
 }

@@ -94,11 +94,12 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
     return sum;
 }
 
-// Sample i of a group of n: u jittered within cell i of an nx x ny grid over [0, 1)^2. The cells
-// partition the square and each sample is uniform in its own, so the group's average stays
-// unbiased, and so do MIS weights (they use one sample's density), resampling and culling
-// (unbiased for any candidates given). Not under leave-one-out control variates, which need the
-// samples independent. Jittered sampling (Cook 1986). `rows` (a textured dome's marginal-
+// A group's samples on PCG streams (the radiosity cache's update paths; camera streams take
+// rng_sobol2_group, group_u): sample i of a group of n, u jittered within cell i of an nx x ny
+// grid over [0, 1)^2. The cells partition the square and each sample is uniform in its own, so
+// the group's average stays unbiased, and so do MIS weights (they use one sample's density),
+// resampling and culling (unbiased for any candidates given). Not under leave-one-out control
+// variates, which need the samples independent. Jittered sampling (Cook 1986). `rows` (a textured dome's marginal-
 // conditional warp): x in n strata, whose cumulative row mass this stratifies exactly, and y in
 // stratum (i + shift) mod n, `shift` uniform per group: a Latin hypercube whose random cyclic
 // order keeps each sample uniform over its x stratum (a fixed order would be biased). Measured on
@@ -176,6 +177,7 @@ struct DirectGroup {
     bool opened;         // whether direct_open() has run for it
     uint j, count;       // the next sample, and its samples (0: none)
     uint shift;          // a textured dome's column order (stratify)
+    uint dim, stride;    // a power-of-two group on a camera stream: the pair its samples share
     bool close;          // whether it ends with shadow_group_end
     bool closed;         // whether its closing flush has started
     GpuLight l;          // a light round's light
@@ -204,8 +206,6 @@ void direct_open_light_round(DirectPlan plan, Shading sh, inout DirectGroup grp,
     if (!picked) grp.n_l = float(grp.count);
     grp.close = !picked;
     grp.cv = has_feature(FEATURE_CONTROL_VARIATES) && !picked && control_variate_applies(sh, grp.l, plan.technique, plan.diffuse_mis);
-    // The textured dome's column order (stratify), drawn once per group.
-    if (!grp.cv && grp.count > 1u && stratify_rows(grp.l, plan.dome)) grp.shift = min(uint(rng_next(rng) * float(grp.count)), grp.count - 1u);
 }
 
 // Opens group grp.g: a light round, the closing group, or a lobe's BRDF samples.
@@ -214,6 +214,8 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
     grp.j = 0u;
     grp.count = 0u;
     grp.shift = 0u;
+    grp.dim = NONE;
+    grp.stride = 1u;
     grp.close = false;
     grp.cv = false;
     grp.cv_sv = grp.cv_so = vec3(0.0);
@@ -231,6 +233,29 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
             grp.close = true;
         }
     }
+    // On a camera stream a group of 2^m samples shares one dimension pair (group_u). Other
+    // counts keep a pair per sample: a block's first 3 of 4 points leave out a quarter that
+    // changes from block to block, which undoes the stratification across samples. Leave-one-out
+    // control variates need the samples independent, one pair each.
+    if (grp.count > 1u && (grp.count & (grp.count - 1u)) == 0u && !grp.cv && rng.dim != RNG_PCG) {
+        grp.dim = rng.dim;
+        rng.dim += 1u;
+        grp.stride = grp.count;
+    }
+    // Otherwise a textured dome's column order (stratify), drawn once per group.
+    if (grp.dim == NONE && !grp.cv && grp.count > 1u && grp.g < plan.rounds && stratify_rows(grp.l, plan.dome))
+        grp.shift = min(uint(rng_next(rng) * float(grp.count)), grp.count - 1u);
+}
+
+// The 2D sample of the group's sample j: for 2^m samples on a camera stream, point j of the
+// group's block of its dimension pair (rng_sobol2_group: stratified within the group and across
+// the pixel's samples at once), else an independent draw jittered into cell j (stratify). Measured against
+// stratify() on camera streams (its own pair per sample; a textured dome's rows with a random
+// column order, which the across-sample stratification did not survive): docs/performance-sampling.md,
+// "A group's samples from one dimension pair".
+vec2 group_u(DirectGroup grp, inout Rng rng, uint j, bool rows) {
+    if (grp.dim != NONE) return rng_sobol2_group(rng, grp.dim, j, grp.stride);
+    return stratify(rng_next2(rng), j, grp.count, grp.shift, rows);
 }
 
 // What the loop does next in a group: the next light the BRDF sample crosses, else the next
@@ -252,8 +277,8 @@ ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, 
                                     inout ShadowRay ray, inout Rng rng) {
     GpuLight l = grp.l;
     float n_l = grp.n_l;
-    vec2 u = rng_next2(rng);
-    LightSample ls = sample_light(l, plan.dome, sh.p, sh.n, grp.cv ? u : stratify(u, grp.j - 1u, grp.count, grp.shift, stratify_rows(l, plan.dome)));
+    vec2 u = grp.cv ? rng_next2(rng) : group_u(grp, rng, grp.j - 1u, stratify_rows(l, plan.dome));
+    LightSample ls = sample_light(l, plan.dome, sh.p, sh.n, u);
     if (!(ls.pdf > 0.0)) return no_shadow_candidate();
     vec3 le = light_radiance(l, ls.uv, ls.delta);
     vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, plan.technique, plan.diffuse_mis, plan.n_b);
@@ -271,13 +296,11 @@ ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, 
     return no_shadow_candidate();
 }
 
-// BRDF sample i of the `count` of lobe k (k == lobes: the diffuse lobe), stratified: its direction
-// and the lights it crosses (ids, their count; 0 when the sample is invalid: the pruning, nothing
-// to trace).
-uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, uint i, uint count, inout Rng rng, out BrdfDir s,
-                        out uint ids[DIRECT_MAX_CROSSED]) {
+// The BRDF sample of lobe k (k == lobes: the diffuse lobe) for 2D sample u (group_u): its
+// direction and the lights it crosses (ids, their count; 0 when the sample is invalid: the
+// pruning, nothing to trace).
+uint direct_brdf_sample(Shading sh, GpuMaterial m, uint k, vec2 u, out BrdfDir s, out uint ids[DIRECT_MAX_CROSSED]) {
     s.delta = false;
-    vec2 u = stratify(rng_next2(rng), i, count, 0u, false);
     if (k == min(m.lobe_count, 2u)) {
         vec3 c = cosine_hemisphere(u);
         s.wi = c.x * sh.t + c.y * sh.b + c.z * sh.n;
@@ -367,7 +390,7 @@ vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) 
                     x = direct_light_sample(plan, sh, m, grp, ray, rng);
                     PROF(PROF_LIGHT_SAMPLE);
                 } else {
-                    grp.crossed = direct_brdf_sample(sh, m, grp.g - plan.first_brdf, grp.j - 1u, grp.count, rng, grp.bdir, ids);
+                    grp.crossed = direct_brdf_sample(sh, m, grp.g - plan.first_brdf, group_u(grp, rng, grp.j - 1u, false), grp.bdir, ids);
                     grp.q = 0u;
                     if (grp.crossed > 0u) step = DIRECT_CROSS;
                     PROF(PROF_BRDF_SAMPLE);

@@ -60,14 +60,30 @@ uint sobol1_reversed(uint i) {
 }
 // 24 bits to [0, 1), so 1 - u >= 2^-24 (never log(0)).
 float rng_float(uint x) { return float(x >> 8) * (1.0 / 16777216.0); }
-vec2 rng_sobol2(inout Rng r) {
-    uint seed = hash_u32(r.state ^ hash_u32(r.dim * 0x9e3779b9u + 0x632be5abu));
-    r.dim += 1u;
-    // Shuffle: an Owen scramble of the index (Burley 2020), so that pairs are decorrelated.
-    uint i = bitfieldReverse(lk_scramble(bitfieldReverse(r.index), seed));
+// Point `index` of dimension pair `dim` of a camera stream.
+vec2 rng_sobol2_point(Rng r, uint dim, uint index) {
+    uint seed = hash_u32(r.state ^ hash_u32(dim * 0x9e3779b9u + 0x632be5abu));
+    // Shuffle: an Owen scramble of the index (Burley 2020), so that pairs are decorrelated. It
+    // maps each aligned block of 2^m indices onto an aligned block, so rng_sobol2_group's points
+    // stay a (0, m, 2)-net.
+    uint i = bitfieldReverse(lk_scramble(bitfieldReverse(index), seed));
     uint x = bitfieldReverse(lk_scramble(i, hash_u32(seed ^ 0xa511e9b3u)));
     uint y = bitfieldReverse(lk_scramble(sobol1_reversed(i), hash_u32(seed ^ 0x63d83595u)));
     return vec2(rng_float(x), rng_float(y));
+}
+vec2 rng_sobol2(inout Rng r) {
+    vec2 p = rng_sobol2_point(r, r.dim, r.index);
+    r.dim += 1u;
+    return p;
+}
+// Sample j of the `stride` (a power of two) that one dimension pair gives each camera sample:
+// Sobol point index * stride + j. A camera sample's stride points are an aligned block, a
+// (0, log2 stride, 2)-net (one point in every elementary interval of area 1 / stride: every row
+// and column stratum, every grid cell), and a pixel's first k camera samples take the first
+// k * stride points of one (0, 2)-sequence, stratified across samples as well as within them.
+// Every point is uniform: estimators stay unbiased.
+vec2 rng_sobol2_group(Rng r, uint dim, uint j, uint stride) {
+    return rng_sobol2_point(r, dim, r.index * stride + j);
 }
 // PCG-RXS-M-XS 32.
 float rng_pcg(inout Rng r) {
