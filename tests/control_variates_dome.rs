@@ -32,6 +32,8 @@ fn settings(cv: ControlVariates, spp: u32, light_samples: u32) -> RenderSettings
         integrator: Direct(DirectLighting {
             technique: Technique::Mis,
             light_samples,
+            // 8 N_max, not the default 2: the zero-variance case below needs 32 samples.
+            dome_samples: 8,
             control_variates: cv,
             ..Default::default()
         })
@@ -88,8 +90,8 @@ fn dome_fully_lit_plane_has_zero_variance() {
     // E = pi L over the floor's hemisphere, so every pixel is rho L (x 0.7 for the uniform map).
     // The map's sampler puts about half of the samples below the horizon (untraced, g = 0), and
     // the control needs a traced sample (avgvis) or two (loo) to know the visibility: with 32
-    // light samples, fewer than two above the horizon has probability 33 / 2^32 per pixel. A
-    // textured dome takes 8 N_max samples, so N_max 4 gives it the same 32. The constant dome's
+    // light samples, fewer than two above the horizon has probability 33 / 2^32 per pixel. The
+    // textured dome takes 8 N_max samples here (settings), so N_max 4 gives it the same 32. The constant dome's
     // samples are cosine-weighted about the normal (glsl/lights/infinite_lights.glsl): each one
     // is rho L already, so the plain estimator is exact there too.
     let cases = [

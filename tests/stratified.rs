@@ -98,7 +98,7 @@ fn stratified_dome_samples_match_the_quadrature_of_the_map() {
     let e = dome_irradiance_quadrature(texture, rotation_deg, convention, DVec3::Y)
         * DVec3::new(radiance.x.into(), radiance.y.into(), radiance.z.into());
     assert!(e.min_element() > 0.0);
-    // A textured dome takes 8 N_max samples: 32 (one block of points) at N_max 4, 24 row strata
+    // A textured dome takes 2 N_max samples: 8 (one block of points) at N_max 4, 6 row strata
     // with shifted columns at 3.
     for light_samples in [4, 3] {
         let integrator = Direct(DirectLighting {

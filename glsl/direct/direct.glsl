@@ -8,7 +8,7 @@
 // * Light sample counts follow the course: a light takes N_L = ceil(share x N_max) samples, with
 //   `share` its solid angle over the hemisphere's 2 pi (1 for the dome), N_L in [floor, N_max]
 //   (floor 1 unless the allocation pilot raised it, src/render/allocation/); a
-//   textured dome takes 8 N_max (measured at equal time, light_count_for). With the light tree
+//   textured dome takes dome_samples N_max (2 by default; measured at equal time, light_count_for). With the light tree
 //   (LIGHT_SELECT_TREE: above DIRECT_LOOP_LIGHTS lights, or where the allocation pilot chose it),
 //   the infinite lights are still looped over that way and N_max samples are spread over the finite lights, each picking a light by descending the
 //   light tree (select_light(), lights/light_select.glsl): light l then has the expected count
@@ -53,9 +53,9 @@
 
 uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     // A textured dome (a sky with its sun) varies far more over its directions than any other
-    // light: 8 N_max stratified samples. With scrambled Sobol camera samples, 0.84x, 0.41x and
-    // 0.76x the relMSE at equal time of 2 N_max on scenes/bench/dome.json, dome-occluders.json
-    // and mitsuba-dome.json (docs/performance-sampling.md, "The dome's sample count again").
+    // light: dome_samples N_max samples, 2 N_max by default since its groups are nets stratified
+    // across camera samples (docs/performance-sampling.md, "A group's samples from one dimension
+    // pair"; 8 N_max before, "The dome's sample count again"). The pilot moves it.
     if (l.kind == LIGHT_DOME && l.texture != NONE) return frame.dome_samples * n_max;
     // The floor (src/render/allocation/) lifts small lights above their share when a pilot
     // measured that it pays: the share alone gives every small light one sample.

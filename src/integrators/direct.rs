@@ -166,7 +166,7 @@ impl Default for DirectLighting {
             light_samples: 4,
             brdf_samples: 2,
             diffuse_mis: false,
-            dome_samples: 8,
+            dome_samples: 2,
             light_selection: LightSelection::Auto,
             shadow_resample: 1.0,
             shadow_cull: 0.0,
