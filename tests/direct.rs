@@ -189,11 +189,16 @@ const GLOSSY: &str = r#"{
 
 /// The scene is chosen so that BRDF sampling finds every light often in every pixel (a small floor,
 /// a dome every direction reaches): where a technique sees a light in a handful of samples only, its
-/// estimated variance is unreliable and no per-pixel test is valid.
+/// estimated variance is unreliable and no per-pixel test is valid. Light samples alone find the
+/// brushed sphere's sharp lobe (roughness 0.08) rarely too: its renders' kurtosis at the sphere's
+/// highlight is about 8 at 32 spp, so at 8 spp a batch (128 spp in all) a seed whose batches
+/// missed the rare large samples read 15% low with a small spread (t = 7 against MIS; at 512 spp
+/// another seed reached t = 5.4 of 5.4). At 1024 spp the largest |t| is 3.5 of 5.3 over four
+/// seeds; the BRDF samples take 768.
 #[test]
 fn brdf_light_and_mis_converge_to_the_same_image() {
     let mis = render_technique(GLOSSY, 128, Technique::Mis, 11);
-    let light = render_technique(GLOSSY, 128, Technique::Light, 12);
+    let light = render_technique(GLOSSY, 1024, Technique::Light, 12);
     let brdf = render_technique(GLOSSY, 768, Technique::Brdf, 13);
     assert_eq!(
         mis.non_finite_samples + light.non_finite_samples + brdf.non_finite_samples,
