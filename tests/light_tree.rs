@@ -154,7 +154,8 @@ fn sampled_pmf_is_the_replayed_pmf_and_the_host_pmf() {
 }
 
 /// Draws at fixed points: frequencies against the host PMF (chi-square, cells of expected count
-/// < 5 pooled, plus a no-light cell).
+/// < 5 pooled, plus a no-light cell), with a fresh uniform per level (mode 1) and with one
+/// uniform rescaled through the top levels (mode 2, as stratified picks draw).
 #[test]
 fn draw_frequencies_match_the_pmf() {
     let s = setup(200, 12);
@@ -171,14 +172,18 @@ fn draw_frequencies_match_the_pmf() {
             DVec3::new(0.0, 0.3, -1.0).normalize(),
         ),
     ];
-    let cases = points.len() as u32;
+    let cases = 2 * points.len() as u32;
     let alpha = 1.0 - (1.0 - 0.01f64).powf(1.0 / f64::from(cases));
-    for (case, &(p, n)) in (0..cases).zip(&points) {
+    for (case, (mode, &(p, n))) in (0..cases).zip(
+        [1u32, 2]
+            .into_iter()
+            .flat_map(|m| points.iter().map(move |x| (m, x))),
+    ) {
         let count = 1usize << 20;
         let out: Vec<[u32; 4]> = s.kernel.run(
             &s.params,
             &point_inputs(&[(p, n)]),
-            1,
+            mode,
             count,
             100 + case,
             count,

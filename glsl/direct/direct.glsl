@@ -141,6 +141,7 @@ struct DirectPlan {
     bool diffuse_brdf;     // whether the diffuse lobe takes BRDF samples
     uint first_brdf;       // the first lobe's group (after the closing group, if any)
     uint groups;
+    uint pick_dim;         // N_max = 2^m picks on a camera stream: the two pairs they share
 };
 
 DirectPlan direct_plan(Shading sh, GpuMaterial m) {
@@ -161,7 +162,20 @@ DirectPlan direct_plan(Shading sh, GpuMaterial m) {
     bool closing = has_feature(FEATURE_SHADOW_RESAMPLE) && plan.technique != TECHNIQUE_BRDF;
     plan.first_brdf = plan.rounds + (closing ? 1u : 0u);
     plan.groups = plan.first_brdf + (plan.technique == TECHNIQUE_LIGHT ? 0u : plan.lobes + (plan.diffuse_brdf ? 1u : 0u));
+    plan.pick_dim = NONE;
     return plan;
+}
+
+// The picks' pairs: with N_max = 2^m > 1 picks on a camera stream, pick r takes point r of the
+// camera sample's block of one pair for its selection (x) and of another for its light sample, as
+// a group's samples do (group_u): the picks are stratified over the lights' importance (the
+// tree's top levels, light_tree_walk) within a shading point and across the pixel's samples.
+void direct_plan_picks(inout DirectPlan plan, inout Rng rng) {
+    uint n = plan.n_max;
+    if (plan.rounds > plan.looped && n > 1u && (n & (n - 1u)) == 0u && rng.dim != RNG_PCG) {
+        plan.pick_dim = rng.dim;
+        rng.dim += 2u;
+    }
 }
 
 // A BRDF sample's direction, shared by every light it crosses.
@@ -195,7 +209,8 @@ void direct_open_light_round(DirectPlan plan, Shading sh, inout DirectGroup grp,
     uint li;
     bool picked = grp.g >= plan.looped;
     bool reached = true;
-    if (picked) reached = select_light(plan.sel, sh.p, sh.n, float(plan.n_max), rng, li, grp.n_l);
+    float u = picked && plan.pick_dim != NONE ? rng_sobol2_group(rng, plan.pick_dim, grp.g - plan.looped, plan.n_max).x : -1.0;
+    if (picked) reached = select_light(plan.sel, sh.p, sh.n, float(plan.n_max), u, rng, li, grp.n_l);
     else li = looped_light(plan.sel, grp.g);
     if (reached) {
         grp.l = light_seen_from(sh, li);
@@ -277,7 +292,10 @@ ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, 
                                     inout ShadowRay ray, inout Rng rng) {
     GpuLight l = grp.l;
     float n_l = grp.n_l;
-    vec2 u = grp.cv ? rng_next2(rng) : group_u(grp, rng, grp.j - 1u, stratify_rows(l, plan.dome));
+    bool pick = grp.g >= plan.looped && plan.pick_dim != NONE;
+    vec2 u = grp.cv ? rng_next2(rng)
+           : pick ? rng_sobol2_group(rng, plan.pick_dim + 1u, grp.g - plan.looped, plan.n_max)
+           : group_u(grp, rng, grp.j - 1u, stratify_rows(l, plan.dome));
     LightSample ls = sample_light(l, plan.dome, sh.p, sh.n, u);
     if (!(ls.pdf > 0.0)) return no_shadow_candidate();
     vec3 le = light_radiance(l, ls.uv, ls.delta);
@@ -361,6 +379,7 @@ void direct_trace(DirectPlan plan, Shading sh, ShadowRay ray, inout DirectGroup 
 vec3 direct_lighting(Shading sh, GpuMaterial m, inout Rng rng, inout uint rays) {
     if (frame.light_count == 0u) return vec3(0.0);
     DirectPlan plan = direct_plan(sh, m);
+    direct_plan_picks(plan, rng);
     PROF(PROF_DIRECT_PLAN);
     vec3 result = vec3(0.0);
     DirectGroup grp;

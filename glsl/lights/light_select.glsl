@@ -66,20 +66,22 @@ bool light_picked(LightSelection s, GpuLight l) {
     return lights_picked(s) && !(s.mode == LIGHT_SELECT_TREE && infinite);
 }
 
-// One pick at (p, n), as pbrt-v4's LightSampler::Sample: false when there is no light to pick
-// (the tree's importance is 0 everywhere below a node), else `light` and `picks` x its probability
-// in `expected`: the light's expected count among `picks` picks (1: the PMF itself), multiplied in
-// the order direct lighting always did, so that its MIS weights keep their bits.
-bool select_light(LightSelection s, vec3 p, vec3 n, float picks, inout Rng rng, out uint light,
+// One pick at (p, n), as pbrt-v4's LightSampler::Sample, by uniform u in [0, 1) (u < 0: drawn
+// from rng): false when there is no light to pick (the tree's importance is 0 everywhere below a
+// node), else `light` and `picks` x its probability in `expected`: the light's expected count
+// among `picks` picks (1: the PMF itself), multiplied in the order direct lighting always did, so
+// that its MIS weights keep their bits.
+bool select_light(LightSelection s, vec3 p, vec3 n, float picks, float u, inout Rng rng, out uint light,
                   out float expected) {
     if (s.mode == LIGHT_SELECT_TREE) {
-        float pmf = light_tree_walk(frame.light_tree, p, n, true, 0u, rng, light);
+        float pmf = light_tree_walk(frame.light_tree, p, n, true, 0u, u, rng, light);
         expected = picks * pmf;
         return pmf > 0.0;
     }
     // Inverse CDF over the lights.
     uint nlights = frame.light_count;
-    float u = rng_next(rng) * s.total_importance, acc = 0.0;
+    u = (u >= 0.0 ? u : rng_next(rng)) * s.total_importance;
+    float acc = 0.0;
     light = nlights - 1u;
     for (uint i = 0u; i < nlights; ++i) {
         acc += light_importance(get_light(i), p, n);

@@ -51,11 +51,15 @@ float light_tree_importance(GpuLightTreeNode nd, vec3 p, vec3 n) {
     return nd.power * cos_p * cos_ip / d2;
 }
 
-// One descent from the root at (p, n): with `draw`, children are drawn by importance (a fresh
-// uniform per level, so that no PMF is out of reach of a 24-bit u after many levels); without, the
-// descent follows `trail` (bit k: second child at depth k). Returns the probability of the path,
-// 0 where both children of a node have importance 0 (no light; `light` = NONE).
-float light_tree_walk(uint64_t tree, vec3 p, vec3 n, bool draw, uint trail, inout Rng rng, out uint light) {
+// One descent from the root at (p, n): with `draw`, children are drawn by importance; without,
+// the descent follows `trail` (bit k: second child at depth k). Drawing, u in [0, 1) decides the
+// first levels, rescaled to [0, 1) within the child taken (pbrt-v4's LightSampler does this at
+// every level), while the path's probability is at least 2^-8, so that u keeps 16 of its 24 bits;
+// then a fresh uniform per level, so that no PMF is out of reach after many levels. A u
+// stratified over a shading point's picks (direct.glsl, DirectPlan.pick_dim) stratifies them over
+// the tree's top levels. u < 0: fresh uniforms from the first level. Returns the probability of
+// the path, 0 where both children of a node have importance 0 (no light; `light` = NONE).
+float light_tree_walk(uint64_t tree, vec3 p, vec3 n, bool draw, uint trail, float u, inout Rng rng, out uint light) {
     LightTreeRef nodes = LightTreeRef(tree);
     GpuLightTreeNode nd = nodes.v[0];
     uint i = 0u;
@@ -72,7 +76,15 @@ float light_tree_walk(uint64_t tree, vec3 p, vec3 n, bool draw, uint trail, inou
         float sum = c0 + c1;
         if (!(sum > 0.0)) return 0.0;
         float p0 = c0 / sum;
-        bool right = draw ? rng_next(rng) >= p0 : (trail & 1u) != 0u;
+        bool right;
+        if (!draw) {
+            right = (trail & 1u) != 0u;
+        } else if (u >= 0.0 && pmf >= 1.0 / 256.0) {
+            right = u >= p0;
+            u = min(right ? (u - p0) / (1.0 - p0) : u / p0, 0.99999994);
+        } else {
+            right = rng_next(rng) >= p0;
+        }
         trail >>= 1u;
         pmf *= right ? c1 / sum : p0;
         i = right ? nd.link : i + 1u;
@@ -85,7 +97,7 @@ float light_tree_walk(uint64_t tree, vec3 p, vec3 n, bool draw, uint trail, inou
 float light_tree_pmf(uint64_t tree, uint64_t trails, vec3 p, vec3 n, uint light) {
     Rng unused = Rng(0u, 0u, RNG_PCG);
     uint found;
-    float pmf = light_tree_walk(tree, p, n, false, LightTrailRef(trails).v[light], unused, found);
+    float pmf = light_tree_walk(tree, p, n, false, LightTrailRef(trails).v[light], -1.0, unused, found);
     return found == light ? pmf : 0.0;
 }
 
