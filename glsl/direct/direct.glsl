@@ -172,7 +172,7 @@ DirectPlan direct_plan(Shading sh, GpuMaterial m) {
 // tree's top levels, light_tree_walk) within a shading point and across the pixel's samples.
 void direct_plan_picks(inout DirectPlan plan, inout Rng rng) {
     uint n = plan.n_max;
-    if (lights_picked(plan.sel) && plan.rounds > plan.looped && n > 1u && (n & (n - 1u)) == 0u && rng.dim != RNG_PCG) {
+    if (plan.rounds > plan.looped && n > 1u && (n & (n - 1u)) == 0u && rng.dim != RNG_PCG) {
         plan.pick_dim = rng.dim;
         rng.dim += 2u;
     }
@@ -191,8 +191,7 @@ struct DirectGroup {
     bool opened;         // whether direct_open() has run for it
     uint j, count;       // the next sample, and its samples (0: none)
     uint shift;          // a textured dome's column order (stratify)
-    uint dim, stride;    // a power-of-two group, or a pick, on a camera stream: the pair its
-    uint base;           // samples share, and sample 0's place in the camera sample's block
+    uint dim, stride;    // a power-of-two group on a camera stream: the pair its samples share
     bool close;          // whether it ends with shadow_group_end
     bool closed;         // whether its closing flush has started
     GpuLight l;          // a light round's light
@@ -210,15 +209,8 @@ void direct_open_light_round(DirectPlan plan, Shading sh, inout DirectGroup grp,
     uint li;
     bool picked = grp.g >= plan.looped;
     bool reached = true;
-    bool paired = lights_picked(plan.sel) && picked && plan.pick_dim != NONE;
-    float u = paired ? rng_sobol2_group(rng, plan.pick_dim, grp.g - plan.looped, plan.n_max).x : -1.0;
+    float u = picked && plan.pick_dim != NONE ? rng_sobol2_group(rng, plan.pick_dim, grp.g - plan.looped, plan.n_max).x : -1.0;
     if (picked) reached = select_light(plan.sel, sh.p, sh.n, float(plan.n_max), u, rng, li, grp.n_l);
-    if (paired) {
-        // Its light sample: point r of the second pick pair's block (group_u).
-        grp.dim = plan.pick_dim + 1u;
-        grp.stride = plan.n_max;
-        grp.base = grp.g - plan.looped;
-    }
     else li = looped_light(plan.sel, grp.g);
     if (reached) {
         grp.l = light_seen_from(sh, li);
@@ -239,7 +231,6 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
     grp.shift = 0u;
     grp.dim = NONE;
     grp.stride = 1u;
-    grp.base = 0u;
     grp.close = false;
     grp.cv = false;
     grp.cv_sv = grp.cv_so = vec3(0.0);
@@ -277,20 +268,9 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
 // stratify() on camera streams (its own pair per sample; a textured dome's rows with a random
 // column order, which the across-sample stratification did not survive): docs/performance-sampling.md,
 // "A group's samples from one dimension pair".
-// One Sobol point per call site, whichever the case (each inlined copy is code for the driver to
-// compile). With a control variate, the sample's own pair, not jittered.
 vec2 group_u(DirectGroup grp, inout Rng rng, uint j, bool rows) {
-    vec2 u;
-    if (rng.dim == RNG_PCG) {
-        float a = rng_pcg(rng);
-        u = vec2(a, rng_pcg(rng));
-    } else {
-        bool in_block = grp.dim != NONE;
-        u = rng_sobol2_point(rng, in_block ? grp.dim : rng.dim, in_block ? rng.index * grp.stride + grp.base + j : rng.index);
-        if (in_block) return u;
-        rng.dim += 1u;
-    }
-    return grp.cv ? u : stratify(u, j, grp.count, grp.shift, rows);
+    if (grp.dim != NONE) return rng_sobol2_group(rng, grp.dim, j, grp.stride);
+    return stratify(rng_next2(rng), j, grp.count, grp.shift, rows);
 }
 
 // What the loop does next in a group: the next light the BRDF sample crosses, else the next
@@ -312,7 +292,10 @@ ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, 
                                     inout ShadowRay ray, inout Rng rng) {
     GpuLight l = grp.l;
     float n_l = grp.n_l;
-    vec2 u = group_u(grp, rng, grp.j - 1u, stratify_rows(l, plan.dome));
+    bool pick = grp.g >= plan.looped && plan.pick_dim != NONE;
+    vec2 u = grp.cv ? rng_next2(rng)
+           : pick ? rng_sobol2_group(rng, plan.pick_dim + 1u, grp.g - plan.looped, plan.n_max)
+           : group_u(grp, rng, grp.j - 1u, stratify_rows(l, plan.dome));
     LightSample ls = sample_light(l, plan.dome, sh.p, sh.n, u);
     if (!(ls.pdf > 0.0)) return no_shadow_candidate();
     vec3 le = light_radiance(l, ls.uv, ls.delta);
