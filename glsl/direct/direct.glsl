@@ -94,8 +94,9 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
     return sum;
 }
 
-// A group's samples on PCG streams (the radiosity cache's update paths; camera streams take
-// rng_sobol2_group, group_u): sample i of a group of n, u jittered within cell i of an nx x ny
+// A group's samples other than 2^m on a camera stream (those take rng_sobol2_group, group_u),
+// and every group on PCG streams (the radiosity cache's update paths): sample i of a group of
+// n, u jittered within cell i of an nx x ny
 // grid over [0, 1)^2. The cells partition the square and each sample is uniform in its own, so
 // the group's average stays unbiased, and so do MIS weights (they use one sample's density),
 // resampling and culling (unbiased for any candidates given). Not under leave-one-out control
@@ -191,7 +192,7 @@ struct DirectGroup {
     bool opened;         // whether direct_open() has run for it
     uint j, count;       // the next sample, and its samples (0: none)
     uint shift;          // a textured dome's column order (stratify)
-    uint dim, stride;    // a power-of-two group on a camera stream: the pair its samples share
+    uint dim;            // a 2^m group on a camera stream: the pair its samples share (group_u)
     bool close;          // whether it ends with shadow_group_end
     bool closed;         // whether its closing flush has started
     GpuLight l;          // a light round's light
@@ -230,7 +231,6 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
     grp.count = 0u;
     grp.shift = 0u;
     grp.dim = NONE;
-    grp.stride = 1u;
     grp.close = false;
     grp.cv = false;
     grp.cv_sv = grp.cv_so = vec3(0.0);
@@ -255,7 +255,6 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
     if (grp.count > 1u && (grp.count & (grp.count - 1u)) == 0u && !grp.cv && rng.dim != RNG_PCG) {
         grp.dim = rng.dim;
         rng.dim += 1u;
-        grp.stride = grp.count;
     }
     // Otherwise a textured dome's column order (stratify), drawn once per group.
     if (grp.dim == NONE && !grp.cv && grp.count > 1u && grp.g < plan.rounds && stratify_rows(grp.l, plan.dome))
@@ -269,7 +268,7 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
 // column order, which the across-sample stratification did not survive): docs/performance-sampling.md,
 // "A group's samples from one dimension pair".
 vec2 group_u(DirectGroup grp, inout Rng rng, uint j, bool rows) {
-    if (grp.dim != NONE) return rng_sobol2_group(rng, grp.dim, j, grp.stride);
+    if (grp.dim != NONE) return rng_sobol2_group(rng, grp.dim, j, grp.count);
     return stratify(rng_next2(rng), j, grp.count, grp.shift, rows);
 }
 
