@@ -10,7 +10,6 @@
 #include "shared/profile.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
-layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
 layout(push_constant, scalar) uniform PassBlock { PassConstants pc; };
 
 void main() {
@@ -20,7 +19,7 @@ void main() {
     // The film holds float32 sums of at most 256 samples per pixel: the host adds them exactly in
     // fixed point (src/film/mod.rs), since long float32 running sums round systematically.
     uint slot = film_slot(pix);
-    FilmPixel acc = film[slot];
+    FilmPixel acc = film_load(pc, slot);
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint samples = film_sample_count(pc, pixel);
     PROF_START();
@@ -47,6 +46,6 @@ void main() {
         PROF(PROF_FILM);
     }
     acc.beauty_sq.w += float(rays);
-    film[slot] = acc;
+    film_store(pc, slot, acc);
     PROF_END(frame.profile, slot);
 }

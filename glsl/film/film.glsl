@@ -14,6 +14,8 @@
 #include "lights/lights.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelEndRef { uint v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 16) buffer FilmRef { FilmPixel v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 16) buffer AovRef { vec4 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelOrderRef { uint v[]; };
 
 // The invocation's y in its dispatch, the workgroup rows interleaved by `row_step`
@@ -47,6 +49,19 @@ bool film_pixel(PassConstants p, out uvec2 pix, out uint pixel) {
 // Frame.film_x0, film_y0, film_width (the job's pixels, with adaptive sampling its pilot's).
 uint film_slot(uvec2 pix) {
     return (pix.y - frame.film_y0) * frame.film_width + (pix.x - frame.film_x0);
+}
+
+// Film slot `slot`'s sums in pass p's device film, and their write-back (one invocation owns a
+// pixel: no atomics). By address (PassConstants.film_address says why).
+FilmPixel film_load(PassConstants p, uint slot) { return FilmRef(p.film_address).v[slot]; }
+void film_store(PassConstants p, uint slot, FilmPixel acc) { FilmRef(p.film_address).v[slot] = acc; }
+
+// AOV plane k of `planes` at film slot `slot` (layout.glsl, BINDING_AOVS), and its write-back.
+vec4 aov_load(PassConstants p, uint slot, uint planes, uint k) {
+    return AovRef(p.aovs_address).v[slot * planes + k];
+}
+void aov_store(PassConstants p, uint slot, uint planes, uint k, vec4 v) {
+    AovRef(p.aovs_address).v[slot * planes + k] = v;
 }
 
 // The samples of pass p that pixel `pixel` takes: all of them, or with adaptive sampling those

@@ -36,8 +36,6 @@
 #include "film/film.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
-layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
-layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
 layout(push_constant, scalar) uniform PassBlock { FullPass pc; };
 layout(buffer_reference, scalar, buffer_reference_align = 8) writeonly buffer RecordRef { RadiosityRecord v[]; };
 
@@ -96,10 +94,10 @@ bool full_begin(bool update, out FullPixel px) {
     }
     if (!film_pixel(pc.film, px.pix, px.pixel)) return false;
     px.slot = film_slot(px.pix);
-    px.acc = film[px.slot];
-    px.a_direct = aovs[px.slot * AOV_PLANES + AOV_DIRECT];
-    px.a_indirect = aovs[px.slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
-    px.a_reflection = aovs[px.slot * AOV_PLANES + AOV_REFLECTION];
+    px.acc = film_load(pc.film, px.slot);
+    px.a_direct = aov_load(pc.film, px.slot, AOV_PLANES, AOV_DIRECT);
+    px.a_indirect = aov_load(pc.film, px.slot, AOV_PLANES, AOV_INDIRECT_DIFFUSE);
+    px.a_reflection = aov_load(pc.film, px.slot, AOV_PLANES, AOV_REFLECTION);
     return true;
 }
 
@@ -392,8 +390,8 @@ void main() {
     }
     if (update) return;
     px.acc.beauty_sq.w += float(rays);
-    film[px.slot] = px.acc;
-    aovs[px.slot * AOV_PLANES + AOV_DIRECT] = px.a_direct;
-    aovs[px.slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = px.a_indirect;
-    aovs[px.slot * AOV_PLANES + AOV_REFLECTION] = px.a_reflection;
+    film_store(pc.film, px.slot, px.acc);
+    aov_store(pc.film, px.slot, AOV_PLANES, AOV_DIRECT, px.a_direct);
+    aov_store(pc.film, px.slot, AOV_PLANES, AOV_INDIRECT_DIFFUSE, px.a_indirect);
+    aov_store(pc.film, px.slot, AOV_PLANES, AOV_REFLECTION, px.a_reflection);
 }

@@ -19,8 +19,6 @@
 #include "shared/profile.glsl"
 
 layout(local_size_x = WORKGROUP_X, local_size_y = WORKGROUP_Y) in;
-layout(scalar, binding = BINDING_FILM) buffer FilmBlock { FilmPixel film[]; };
-layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
 layout(push_constant, scalar) uniform PassBlock { PassConstants pc; };
 
 #define AOV_DIRECT 0u
@@ -33,10 +31,10 @@ void main() {
     uint pixel;
     if (!film_pixel(pc, pix, pixel)) return;
     uint slot = film_slot(pix);
-    FilmPixel acc = film[slot];
-    vec4 a_direct = aovs[slot * AOV_PLANES + AOV_DIRECT];
-    vec4 a_indirect = aovs[slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE];
-    vec4 a_reflection = aovs[slot * AOV_PLANES + AOV_REFLECTION];
+    FilmPixel acc = film_load(pc, slot);
+    vec4 a_direct = aov_load(pc, slot, AOV_PLANES, AOV_DIRECT);
+    vec4 a_indirect = aov_load(pc, slot, AOV_PLANES, AOV_INDIRECT_DIFFUSE);
+    vec4 a_reflection = aov_load(pc, slot, AOV_PLANES, AOV_REFLECTION);
     uint max_depth = frame.max_depth;
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
     uint samples = film_sample_count(pc, pixel);
@@ -126,9 +124,9 @@ void main() {
         PROF(PROF_FILM);
     }
     acc.beauty_sq.w += float(rays);
-    film[slot] = acc;
-    aovs[slot * AOV_PLANES + AOV_DIRECT] = a_direct;
-    aovs[slot * AOV_PLANES + AOV_INDIRECT_DIFFUSE] = a_indirect;
-    aovs[slot * AOV_PLANES + AOV_REFLECTION] = a_reflection;
+    film_store(pc, slot, acc);
+    aov_store(pc, slot, AOV_PLANES, AOV_DIRECT, a_direct);
+    aov_store(pc, slot, AOV_PLANES, AOV_INDIRECT_DIFFUSE, a_indirect);
+    aov_store(pc, slot, AOV_PLANES, AOV_REFLECTION, a_reflection);
     PROF_END(frame.profile, slot);
 }

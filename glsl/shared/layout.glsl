@@ -15,14 +15,16 @@
 
 // Descriptor set 0.
 #define BINDING_FRAME 0
+// The device film (FilmPixel per film slot) for the resolve kernels; the integrators' film
+// kernels reach it by address instead (PassConstants.film_address, glsl/film/film.glsl).
 #define BINDING_FILM 1
 // The AOV planes an integrator declares (Integrator::aov_planes, src/render/integrator.rs): only
-// when it declares P > 0 of them, a storage buffer of P vec4 sums per pixel of the device film,
-// plane k of the pixel in film slot p (film_slot, as for the film) at aovs[p * P + k]; .rgb are the sums of the
+// when it declares P > 0 of them, a buffer of P vec4 sums per pixel of the device film, plane k
+// of the pixel in film slot p (film_slot, as for the film) at p * P + k; .rgb are the sums of the
 // block's samples, .w is unused (keep it 0). Cleared and read back with the film, so the same
-// 256-sample block rules hold. A kernel declares it as
-//     layout(scalar, binding = BINDING_AOVS) buffer AovBlock { vec4 aovs[]; };
-// and adds to it as to the film (one invocation owns a pixel: no atomics).
+// 256-sample block rules hold. Film kernels reach it at PassConstants.aovs_address (aov_load,
+// aov_store, glsl/film/film.glsl) and add to it as to the film (one invocation owns a pixel: no
+// atomics); resolve_aov.comp reads it at BINDING_AOVS.
 #define BINDING_AOVS 4
 // Floats of one AOV plane's sums at a pixel (its vec4), as the host reads them.
 #define AOV_CHANNELS 4
@@ -297,6 +299,12 @@ struct PassConstants {
                           // of workgroups lavapipe gives its threads spans the whole tile
     uint pad1;
     uint pad2;
+    // Device addresses of the film (FilmPixel per film slot) and of its AOV planes (0: none). Not
+    // storage-buffer descriptors: lavapipe turns each access to one at a per-lane index into a
+    // branch per lane and component (60% of the `full` kernel's basic blocks, a quarter of its
+    // compile time: docs/performance-kernels.md, "The film by address").
+    uint64_t film_address;
+    uint64_t aovs_address;
 };
 
 struct GpuVertex {

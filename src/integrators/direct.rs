@@ -6,10 +6,10 @@
 use crate::error::Result;
 use crate::layout::*;
 use crate::render::allocation::{AllocationMode, loop_affordable};
-use crate::render::film_kernel::{bind_film, dispatch_tile, film_pipeline};
+use crate::render::film_kernel::FilmKernel;
 use crate::render::{Integrator, IntegratorPasses, Params, PreparedScene};
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, Context};
 use ash::vk;
 
 /// How direct lighting is estimated (docs/techniques.md, "The direct-lighting estimator").
@@ -410,12 +410,12 @@ impl Integrator for Direct {
 }
 
 pub struct PrimaryKernel {
-    pipeline: ComputePipeline,
+    kernel: FilmKernel,
 }
 
 impl PrimaryKernel {
     pub fn new(ctx: &Context, scene: &PreparedScene, features: u32) -> Result<PrimaryKernel> {
-        let pipeline = film_pipeline(
+        let kernel = FilmKernel::new(
             ctx,
             scene,
             features,
@@ -424,16 +424,16 @@ impl PrimaryKernel {
             false,
             std::mem::size_of::<PassConstants>(),
         )?;
-        Ok(PrimaryKernel { pipeline })
+        Ok(PrimaryKernel { kernel })
     }
 }
 
 impl IntegratorPasses for PrimaryKernel {
     fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
-        bind_film(&self.pipeline, frame, film, aovs);
+        self.kernel.bind(frame, film, aovs);
     }
 
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
-        dispatch_tile(&self.pipeline, cmd, pass);
+        self.kernel.dispatch_tile(cmd, pass);
     }
 }

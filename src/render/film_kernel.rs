@@ -1,57 +1,90 @@
 //! What every integrator's film kernel shares: its pipeline over film pixels (frame constants,
-//! film, AOV planes, trace structure), its binding to a render's buffers and its dispatch over a
-//! tile, its workgroup rows interleaved on lavapipe.
+//! trace structure; the film and AOV planes by address), its binding to a render's buffers and
+//! its dispatch over a tile, its workgroup rows interleaved on lavapipe.
 
 use super::PreparedScene;
 use crate::error::Result;
 use crate::layout::*;
 use crate::vk::{Buffer, ComputePipeline, Context};
 use ash::vk;
+use std::sync::atomic::{AtomicU64, Ordering};
 
-/// A kernel over film pixels (frame constants, film, the AOV planes if `aovs`, the trace
-/// structure), with the scene's feature switches and `features` (the settings' own), taking
-/// `push_size` bytes of push constants (PassConstants, or a struct that begins with them).
-pub fn film_pipeline(
-    ctx: &Context,
-    scene: &PreparedScene,
-    features: u32,
-    name: &str,
-    (rq, bvh): (&'static [u8], &'static [u8]),
+/// A kernel over film pixels: its pipeline (frame constants and the trace structure by
+/// descriptor, the scene's feature switches and the settings' own) and the device addresses of
+/// the film and AOV planes it is bound to, which its dispatches pass in PassConstants
+/// (`film_address`, `aovs_address`): lavapipe compiles a storage buffer's access at a per-lane
+/// index into a branch per lane and component, which cost the `full` kernel a quarter of its
+/// compile time (docs/performance-kernels.md, "The film by address").
+pub struct FilmKernel {
+    pub pipeline: ComputePipeline,
+    /// Whether the kernel adds to AOV planes (Integrator::aov_planes).
     aovs: bool,
-    push_size: usize,
-) -> Result<ComputePipeline> {
-    let mut bindings = vec![
-        (BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER),
-        (BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER),
-    ];
-    if aovs {
-        bindings.push((BINDING_AOVS, vk::DescriptorType::STORAGE_BUFFER));
-    }
-    bindings.extend(scene.trace.bindings());
-    let pipeline = ComputePipeline::new(
-        ctx,
-        name,
-        scene.trace.select(rq, bvh),
-        &bindings,
-        push_size as u32,
-        &[scene.gpu.features | features],
-    )?;
-    scene.trace.bind(&pipeline);
-    Ok(pipeline)
+    /// The bound film's and AOV planes' addresses (0: not bound).
+    film: [AtomicU64; 2],
 }
 
-/// Points a film kernel at a render's buffers.
-pub fn bind_film(pipeline: &ComputePipeline, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
-    pipeline.bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
-    pipeline.bind_buffer(BINDING_FILM, vk::DescriptorType::STORAGE_BUFFER, film);
-    if let Some(a) = aovs {
-        pipeline.bind_buffer(BINDING_AOVS, vk::DescriptorType::STORAGE_BUFFER, a);
+impl FilmKernel {
+    /// The kernel `name` (its ray-query and BVH variants), taking `push_size` bytes of push
+    /// constants (PassConstants, or a struct that begins with them).
+    pub fn new(
+        ctx: &Context,
+        scene: &PreparedScene,
+        features: u32,
+        name: &str,
+        (rq, bvh): (&'static [u8], &'static [u8]),
+        aovs: bool,
+        push_size: usize,
+    ) -> Result<FilmKernel> {
+        let mut bindings = vec![(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER)];
+        bindings.extend(scene.trace.bindings());
+        let pipeline = ComputePipeline::new(
+            ctx,
+            name,
+            scene.trace.select(rq, bvh),
+            &bindings,
+            push_size as u32,
+            &[scene.gpu.features | features],
+        )?;
+        scene.trace.bind(&pipeline);
+        Ok(FilmKernel {
+            pipeline,
+            aovs,
+            film: [AtomicU64::new(0), AtomicU64::new(0)],
+        })
     }
-}
 
-/// Dispatches a film kernel over the pixels of `pass.tile`.
-pub fn dispatch_tile(pipeline: &ComputePipeline, cmd: vk::CommandBuffer, pass: &PassConstants) {
-    pipeline.dispatch(cmd, bytemuck::bytes_of(pass), tile_groups(pass.tile));
+    /// Points the kernel at a render's frame constants, film and AOV planes.
+    pub fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
+        debug_assert!(
+            !self.aovs || aovs.is_some(),
+            "a kernel that adds to AOV planes needs them bound"
+        );
+        self.pipeline
+            .bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, frame);
+        self.film[0].store(film.address, Ordering::Relaxed);
+        let aovs = if self.aovs {
+            aovs.map_or(0, |a| a.address)
+        } else {
+            0
+        };
+        self.film[1].store(aovs, Ordering::Relaxed);
+    }
+
+    /// `pass` with the bound film's addresses.
+    pub fn pass(&self, pass: &PassConstants) -> PassConstants {
+        PassConstants {
+            film_address: self.film[0].load(Ordering::Relaxed),
+            aovs_address: self.film[1].load(Ordering::Relaxed),
+            ..*pass
+        }
+    }
+
+    /// Dispatches the kernel over the pixels of `pass.tile`.
+    pub fn dispatch_tile(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
+        let pass = self.pass(pass);
+        self.pipeline
+            .dispatch(cmd, bytemuck::bytes_of(&pass), tile_groups(pass.tile));
+    }
 }
 
 /// The workgroups of a film kernel over the pixels of `tile` (x0, y0, width, height).

@@ -9,10 +9,10 @@ mod radiosity;
 use super::direct::DirectLighting;
 use crate::error::Result;
 use crate::layout::*;
-use crate::render::film_kernel::{bind_film, dispatch_tile, film_pipeline, tile_groups};
+use crate::render::film_kernel::{FilmKernel, tile_groups};
 use crate::render::{Integrator, IntegratorPasses, Params, PreparedScene, Schedule};
 use crate::shaders;
-use crate::vk::{Buffer, ComputePipeline, Context};
+use crate::vk::{Buffer, Context};
 use ash::vk;
 use radiosity::{CacheShape, RadiosityCache};
 use std::cell::RefCell;
@@ -102,7 +102,7 @@ impl Integrator for Path {
     }
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
-        Ok(Box::new(FilmKernel(film_pipeline(
+        Ok(Box::new(PathKernel(FilmKernel::new(
             ctx,
             scene,
             self.lighting.kernel_features(),
@@ -114,15 +114,15 @@ impl Integrator for Path {
     }
 }
 
-struct FilmKernel(ComputePipeline);
+struct PathKernel(FilmKernel);
 
-impl IntegratorPasses for FilmKernel {
+impl IntegratorPasses for PathKernel {
     fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
-        bind_film(&self.0, frame, film, aovs);
+        self.0.bind(frame, film, aovs);
     }
 
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
-        dispatch_tile(&self.0, cmd, pass);
+        self.0.dispatch_tile(cmd, pass);
     }
 }
 
@@ -241,7 +241,7 @@ impl Integrator for Full {
 
     fn kernels(&self, ctx: &Context, scene: &PreparedScene) -> Result<Box<dyn IntegratorPasses>> {
         // One kernel for the film pass and the cache's update pass (glsl/indirect/full.comp).
-        let kernel = film_pipeline(
+        let kernel = FilmKernel::new(
             ctx,
             scene,
             self.lighting.kernel_features(),
@@ -260,7 +260,7 @@ impl Integrator for Full {
 
 struct FullKernels {
     /// Runs both passes: FullPass.mode chooses.
-    kernel: ComputePipeline,
+    kernel: FilmKernel,
     /// Created by the first render that uses a cache.
     cache: RefCell<Option<RadiosityCache>>,
     /// Why the last render had no cache ("" when it had one).
@@ -310,7 +310,7 @@ impl IntegratorPasses for FullKernels {
     }
 
     fn bind(&self, frame: &Buffer, film: &Buffer, aovs: Option<&Buffer>) {
-        bind_film(&self.kernel, frame, film, aovs);
+        self.kernel.bind(frame, film, aovs);
     }
 
     fn stateful(&self) -> bool {
@@ -322,7 +322,7 @@ impl IntegratorPasses for FullKernels {
             // The update pass runs in the kernel bound to this render's buffers (bind comes
             // first): it reads none of the film's, but the descriptors must be valid.
             Some(c) if self.off_reason.borrow().is_empty() => {
-                c.begin(ctx, &self.kernel, seed, first, count)
+                c.begin(ctx, &self.kernel.pipeline, seed, first, count)
             }
             _ => Ok(count),
         }
@@ -330,11 +330,12 @@ impl IntegratorPasses for FullKernels {
 
     fn record(&self, cmd: vk::CommandBuffer, pass: &PassConstants) {
         let push = FullPass {
-            film: *pass,
+            film: self.kernel.pass(pass),
             mode: FULL_PASS_FILM,
             ..Default::default()
         };
         self.kernel
+            .pipeline
             .dispatch(cmd, bytemuck::bytes_of(&push), tile_groups(pass.tile));
     }
 
