@@ -49,9 +49,9 @@ layout(buffer_reference, scalar, buffer_reference_align = 8) writeonly buffer Re
 // indirect diffuse (the diffuse chain, indirect.glsl), then the reflection chain; at each
 // reflected point direct lighting, then its indirect diffuse. Update: camera hit, first bounce;
 // at each path vertex direct lighting, then the diffuse chain from the next vertex, which the
-// path then visits itself. The kernel so holds one closest-hit traversal and one
-// direct_lighting() (with its shadow-ray traversal) for both passes, instead of one per call site
-// and pass (the driver inlines every call: each copy is LLVM compile time).
+// path then visits itself. The kernel so holds one closest-hit traversal, one direct_lighting()
+// (with its shadow-ray traversal) and one sample_bounce() for both passes, instead of one per
+// call site and pass (the driver inlines every call: each copy is LLVM compile time).
 #define RAY_CAMERA 0u
 #define RAY_VERTEX 1u   // its hit is a path vertex: film, a reflection's; update, vertex v
 #define RAY_DIFFUSE 2u  // its hit is a vertex of the diffuse chain
@@ -132,8 +132,9 @@ struct FullPath {
     float width_d, angle_d;
     // This iteration: direct lighting at the hit (of its diffuse lobe only, or of its specular
     // lobes only where the cache gave the diffuse lobe's), the end of the diffuse chain, a
-    // BRDF-sampled bounce from the path vertex.
-    bool shade, diffuse_only, specular_only, diffuse_over, bounce;
+    // BRDF-sampled bounce from the path vertex, and whether that bounce waits for the next
+    // iteration (full_step says why).
+    bool shade, diffuse_only, specular_only, diffuse_over, bounce, resume;
 };
 
 // Sample `sample_index`'s camera ray (update: through a random point of the path's block, from a
@@ -170,6 +171,7 @@ FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, out Rng r
     p.vertex_d = 0u;
     p.width_d = 0.0;
     p.angle_d = frame.diffuse_spread;
+    p.resume = false;
     return p;
 }
 
@@ -297,10 +299,9 @@ bool full_gather(inout FullPath p) {
     return true;
 }
 
-// A BRDF-sampled bounce from the path vertex (material m_s): the reflection chain's throughput,
-// or the update pass's cone (as the film pass's, indirect.glsl: a diffuse bounce starts a new one).
-bool full_bounce(bool update, GpuMaterial m_s, inout FullPath p, inout Rng rng) {
-    Bounce b = sample_bounce(p.sh_s, m_s, update, true, rng);
+// The path vertex's BRDF-sampled bounce b: the reflection chain's throughput, or the update
+// pass's cone (as the film pass's, indirect.glsl: a diffuse bounce starts a new one).
+bool full_bounce(bool update, Bounce b, inout FullPath p) {
     if (!b.valid) return false;
     if (!update) {
         p.thr_s *= b.weight;
@@ -339,50 +340,80 @@ void main() {
         GpuMaterial m;     // the hit's material
         GpuMaterial m_s;   // the path vertex's
         for (;;) {
-            if (p.trace) {
-                p.h = trace_closest(p.o, p.d, 0.0, INF, p.mask);
-                rays += 1u;
+            // The path vertex's bounce, left for this iteration by the last one (below): nothing
+            // else happens in it.
+            bool resume = p.resume;
+            p.resume = false;
+            bool chain = false;   // this iteration's bounce is the diffuse chain's, from a glossy hit
+            if (!resume) {
+                if (p.trace) {
+                    p.h = trace_closest(p.o, p.d, 0.0, INF, p.mask);
+                    rays += 1u;
+                }
+                p.trace = true;
+                p.mask = MASK_OCCLUDERS;
+                // The hit's surface and shading: one copy of that code for every kind of ray.
+                Surface s;
+                bool material = false;
+                if (p.h.kind != HIT_NONE) {
+                    s = surface_at(p.h, p.o, p.d);
+                    if (s.material != NONE) {
+                        m = get_material(s.material);
+                        p.sh = shading_at(s, m, p.d);
+                        material = true;
+                    }
+                }
+                if (!full_visit(update, cache, s, material, m, p, px.acc, rng)) break;
+                if (p.diffuse_only) m.lobe_count = 0u;
+                if (p.specular_only) p.sh.albedo = vec3(0.0);
+                vec3 dl = p.shade ? direct_lighting(p.sh, m, rng, rays) : vec3(0.0);
+                // The hit becomes the path vertex where it is lit as one (and at the update pass's
+                // first bounce); else a lit hit is a vertex of the diffuse chain.
+                bool vertex = p.shade && p.ray <= RAY_VERTEX;
+                if (vertex || p.bounce) m_s = m;
+                if (vertex) {
+                    full_path_vertex(update, dl, p, px.acc, rng);
+                } else if (p.shade) {
+                    // A vertex of the diffuse chain: its direct light, then the next bounce.
+                    if (full_glossy(m)) {
+                        p.sum_d += p.thr_d * dl;
+                        chain = true;
+                    } else {
+                        p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d,
+                                                             rng, p.d, p.width_d, p.angle_d);
+                    }
+                    p.ray = RAY_DIFFUSE;
+                }
+                if (!chain && p.diffuse_over && update) {
+                    full_record(p, px.base);
+                    continue;
+                }
+                if (!chain && p.diffuse_over && !full_gather(p)) break;
             }
-            p.trace = true;
-            p.mask = MASK_OCCLUDERS;
-            // The hit's surface and shading: one copy of that code for every kind of ray.
-            Surface s;
-            bool material = false;
-            if (p.h.kind != HIT_NONE) {
-                s = surface_at(p.h, p.o, p.d);
-                if (s.material != NONE) {
-                    m = get_material(s.material);
-                    p.sh = shading_at(s, m, p.d);
-                    material = true;
+            // One BRDF-sampled bounce an iteration, so that the kernel holds one sample_bounce (each
+            // call site is inlined: LLVM compile time): a glossy vertex's of the diffuse chain, or the
+            // path vertex's. Where the chain ends at a glossy vertex and the path vertex then bounces,
+            // that bounce takes the next iteration (p.resume), its random numbers in the same order.
+            if (chain || p.bounce) {
+                Bounce b = sample_bounce(chain ? p.sh : p.sh_s, chain ? m : m_s, chain || update, true,
+                                         rng);
+                if (chain) {
+                    p.d = b.wi;
+                    p.diffuse_over =
+                        !lobe_chain_next(b, p.thr_d, p.vertex_d, rng, p.width_d, p.angle_d);
+                    if (p.diffuse_over && update) {
+                        full_record(p, px.base);
+                        continue;
+                    }
+                    if (p.diffuse_over) {
+                        if (!full_gather(p)) break;
+                        p.resume = true;
+                        continue;
+                    }
+                } else if (!full_bounce(update, b, p)) {
+                    break;
                 }
             }
-            if (!full_visit(update, cache, s, material, m, p, px.acc, rng)) break;
-            if (p.diffuse_only) m.lobe_count = 0u;
-            if (p.specular_only) p.sh.albedo = vec3(0.0);
-            vec3 dl = p.shade ? direct_lighting(p.sh, m, rng, rays) : vec3(0.0);
-            // The hit becomes the path vertex where it is lit as one (and at the update pass's
-            // first bounce); else a lit hit is a vertex of the diffuse chain.
-            bool vertex = p.shade && p.ray <= RAY_VERTEX;
-            if (vertex || p.bounce) m_s = m;
-            if (vertex) {
-                full_path_vertex(update, dl, p, px.acc, rng);
-            } else if (p.shade) {
-                // A vertex of the diffuse chain: its direct light, then the next bounce.
-                if (full_glossy(m)) {
-                    p.diffuse_over = !lobe_chain_next(p.sh, m, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d,
-                                                      p.width_d, p.angle_d);
-                } else {
-                    p.diffuse_over = !diffuse_chain_next(p.sh, dl, p.sum_d, p.thr_d, p.vertex_d, rng, p.d,
-                                                         p.width_d, p.angle_d);
-                }
-                p.ray = RAY_DIFFUSE;
-            }
-            if (p.diffuse_over && update) {
-                full_record(p, px.base);
-                continue;
-            }
-            if (p.diffuse_over && !full_gather(p)) break;
-            if (p.bounce && !full_bounce(update, m_s, p, rng)) break;
             p.o = p.ray == RAY_VERTEX ? p.sh_s.origin : p.sh.origin;
         }
         if (update) break;

@@ -136,15 +136,13 @@ Bounce sample_bounce(Shading sh, GpuMaterial m, bool diffuse, bool specular, ino
 }
 
 // A vertex of the diffuse chain whose material has specular lobes (full.comp, with
-// INTEGRATOR_CAUSTICS): adds its direct light dl to sum with throughput thr, then bounces from its
-// lobes (sh.albedo zero where the cache gave the diffuse lobe's light: from the specular lobes
-// only), widening the ray cone (width, angle) as a specular bounce does or starting a new one at
-// a diffuse bounce; false when the chain ends there (as diffuse_chain_next).
-bool lobe_chain_next(Shading sh, GpuMaterial m, vec3 dl, inout vec3 sum, inout vec3 thr, inout uint vertex,
-                     inout Rng rng, out vec3 wi, inout float width, inout float angle) {
-    sum += thr * dl;
-    Bounce b = sample_bounce(sh, m, true, true, rng);
-    wi = b.wi;
+// INTEGRATOR_CAUSTICS), once its direct light is added and bounce b drawn from its lobes
+// (sample_bounce with sh.albedo zero where the cache gave the diffuse lobe's light: from the
+// specular lobes only): the throughput and the ray cone (width, angle) follow b, widening as a
+// specular bounce does or starting anew at a diffuse bounce; false when the chain ends there (as
+// diffuse_chain_next). The caller draws b: full.comp holds one sample_bounce for both its bounces.
+bool lobe_chain_next(Bounce b, inout vec3 thr, inout uint vertex, inout Rng rng, inout float width,
+                     inout float angle) {
     bool go = b.valid;
     if (go) {
         thr *= b.weight;
