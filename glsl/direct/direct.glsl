@@ -35,6 +35,7 @@
 #ifndef ILLUM_DIRECT_GLSL
 #define ILLUM_DIRECT_GLSL
 
+#extension GL_EXT_control_flow_attributes : require
 #include "shared/layout.glsl"
 #include "shared/common.glsl"
 #include "scene/features.glsl"
@@ -85,7 +86,7 @@ vec3 eval_lobes(Shading sh, GpuMaterial m, vec3 l, float n_l_pdf, uint technique
     if (technique == TECHNIQUE_MIS && diffuse_mis && n_l_pdf > 0.0)
         wd = mis_power(1.0, n_l_pdf, float(n_b), cs * INV_PI);
     sum += sh.albedo * (cs * INV_PI) * wd;
-    for (uint k = 0u; k < min(m.lobe_count, 2u); ++k) {
+    [[dont_unroll]] for (uint k = 0u; k < min(m.lobe_count, 2u); ++k) {
         BrdfEval e = brdf_eval(m.lobes[k], sh.n, sh.t, sh.b, sh.v, l);
         float w = 1.0;
         if (technique == TECHNIQUE_MIS && n_l_pdf > 0.0) w = mis_power(1.0, n_l_pdf, float(n_b), e.pdf);
