@@ -45,6 +45,7 @@
 
 #include "shared/layout.glsl"
 #include "shared/common.glsl"
+#include "scene/features.glsl"
 
 const float MF_ALPHA_MIN = 1e-4;     // clamp (mitsuba3 configure(), pbrt-v4 TrowbridgeReitz)
 const float MF_DELTA_ALPHA = 5e-5;   // below this along both axes (i.e. uploaded as 0): a delta mirror
@@ -105,7 +106,8 @@ bool lobe_is_delta(GpuLobe lobe) {
     return max(lobe.alpha.x, lobe.alpha.y) < MF_DELTA_ALPHA;
 }
 bool lobe_is_ggx(GpuLobe lobe) {
-    return lobe.distribution == DIST_GGX_SMITH || lobe.distribution == DIST_GGX_SMITH_SEPARABLE;
+    return has_feature(FEATURE_GGX)
+        && (lobe.distribution == DIST_GGX_SMITH || lobe.distribution == DIST_GGX_SMITH_SEPARABLE);
 }
 
 // Anisotropic Beckmann D(h), h local (docs/techniques.md, "The D-BRDF").
@@ -175,7 +177,7 @@ BrdfEval brdf_eval(GpuLobe lobe, vec3 n, vec3 t, vec3 b, vec3 v, vec3 l) {
         float G = beckmann_g1_walter(vl, a) * beckmann_g1_walter(ll, a);
         e.pdf = D * h.z / (4.0 * vh);
         e.f_cos = F * (D * G / (4.0 * vl.z));
-    } else {
+    } else if (lobe_is_ggx(lobe)) {
         float D = ggx_d(h, a);
         float lv = ggx_lambda(vl, a);
         float ll_ = ggx_lambda(ll, a);
@@ -258,7 +260,7 @@ BrdfSample brdf_sample(GpuLobe lobe, vec3 n, vec3 t, vec3 b, vec3 v, vec2 u) {
         s.pdf = pdf / (4.0 * vh);
         float G = beckmann_g1_walter(vl, a) * beckmann_g1_walter(ll, a);
         s.weight = F * (G * vh / (vl.z * h.z));
-    } else {
+    } else if (lobe_is_ggx(lobe)) {
         float lv = ggx_lambda(vl, a);
         float l2 = ggx_lambda(ll, a);
         float G1v = 1.0 / (1.0 + lv);

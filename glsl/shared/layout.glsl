@@ -85,6 +85,9 @@
 // A textured dome whose lookup varies inside its sampling cells (Mitsuba's, or illum's bilinear):
 // the cells' shaped densities (DOME_SHAPE_*), whichever cells the map's luminance then shapes.
 #define FEATURE_DOME_SHAPED 8192
+// A material lobe of the GGX (Trowbridge-Reitz) distribution: without one the kernels hold the
+// Beckmann lobes' code only.
+#define FEATURE_GGX 16384
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8

@@ -43,6 +43,15 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
         | feature(!textures.is_empty(), FEATURE_TEXTURES)
         | feature(many_lights, FEATURE_MANY_LIGHTS)
         | feature(
+            scene.materials.iter().any(|m| {
+                m.specular
+                    .iter()
+                    .take(2)
+                    .any(|l| l.distribution == Distribution::GgxSmith)
+            }),
+            FEATURE_GGX,
+        )
+        | feature(
             dome_shaped(scene, scene_lights.dome_source),
             FEATURE_DOME_SHAPED,
         );
