@@ -14,9 +14,9 @@
 #include "lights/lights.glsl"
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelEndRef { uint v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelOrderRef { uint v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 16) buffer FilmRef { FilmPixel v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 16) buffer AovRef { vec4 v[]; };
-layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer PixelOrderRef { uint v[]; };
 
 // The invocation's y in its dispatch, the workgroup rows interleaved by `row_step`
 // (PassConstants.row_step; 0 or 1: in order): lavapipe gives each thread an equal contiguous

@@ -133,7 +133,7 @@ struct FullPath {
     // This iteration: direct lighting at the hit (of its diffuse lobe only, or of its specular
     // lobes only where the cache gave the diffuse lobe's), the end of the diffuse chain, a
     // BRDF-sampled bounce from the path vertex, and whether that bounce waits for the next
-    // iteration (full_step says why).
+    // iteration (main's loop draws one bounce an iteration).
     bool shade, diffuse_only, specular_only, diffuse_over, bounce, resume;
 };
 

@@ -320,7 +320,8 @@ impl IntegratorPasses for FullKernels {
     fn begin(&self, ctx: &Context, seed: u64, first: u32, count: u32) -> Result<u32> {
         match self.cache.borrow().as_ref() {
             // The update pass runs in the kernel bound to this render's buffers (bind comes
-            // first): it reads none of the film's, but the descriptors must be valid.
+            // first): it reads the frame constants, none of the film (its FullPass carries no
+            // film address).
             Some(c) if self.off_reason.borrow().is_empty() => {
                 c.begin(ctx, &self.kernel.pipeline, seed, first, count)
             }
