@@ -394,8 +394,10 @@ fn the_cache_is_left_out_where_nothing_reads_it_and_max_depth_counts_segments() 
     let ctx = context();
     let kernels = Arc::new(Mutex::new(Vec::<String>::new()));
     let k2 = kernels.clone();
-    ctx.set_kernel_listener(Some(Arc::new(move |name: &str| {
-        k2.lock().unwrap().push(name.to_string())
+    ctx.set_kernel_listener(Some(Arc::new(move |e| {
+        if let illum::vk::KernelEvent::Creating(name) = e {
+            k2.lock().unwrap().push(name.to_string())
+        }
     })));
     let no_diffuse = scene(
         r#"{"camera": {"position": [0, 1, 3], "look_at": [0, 0, 0], "fov_y": 50, "resolution": [8, 6]},

@@ -25,8 +25,10 @@ fn a_prepared_scene_renders_again_uploading_only_its_frame_constants() {
     r.loop_limited().unwrap(); // the driver probe, once per renderer, uploads its own buffer
     let kernels = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let k = kernels.clone();
-    ctx.set_kernel_listener(Some(std::sync::Arc::new(move |_: &str| {
-        k.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    ctx.set_kernel_listener(Some(std::sync::Arc::new(move |e| {
+        if let illum::vk::KernelEvent::Creating(_) = e {
+            k.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        }
     })));
     let created = || kernels.load(std::sync::atomic::Ordering::SeqCst);
     let counts = || ctx.upload_counts();

@@ -191,7 +191,7 @@ fn render_run(
     }
     let ctx = renderer.context();
     let bar = progress_bar(a.quiet, settings.spp, Some(a.time));
-    let setup_done = announce_compiles(ctx, &bar, a.quiet);
+    let setup_done = announce_compiles(ctx, &bar, a.quiet, None);
     let started = std::time::Instant::now();
     let out = renderer.render(scene, settings, &mut |_, _| {
         if !setup_done.swap(true, Ordering::SeqCst) {

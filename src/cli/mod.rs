@@ -6,6 +6,7 @@ pub mod bench;
 pub mod bench_lights;
 pub mod compare;
 pub mod devices;
+mod fast_start;
 pub mod merge;
 pub mod part;
 pub mod render;

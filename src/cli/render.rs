@@ -1,5 +1,6 @@
 //! `illum render`: one scene to EXR (and PNG), with optional error reports.
 
+use super::fast_start::{self, FastStart};
 use super::{DeviceArgs, IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
 use crate::film::Window;
 use crate::output::image_metadata;
@@ -13,7 +14,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone)]
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
@@ -131,6 +132,21 @@ impl RenderArgs {
         }
     }
 
+    /// These arguments with every output in `dir` (the second process of a fast start).
+    fn staged(&self, dir: &Path) -> RenderArgs {
+        let mut a = self.clone();
+        a.output = fast_start::staged(dir, "image", &self.output);
+        a.report = self
+            .report
+            .as_deref()
+            .map(|p| fast_start::staged(dir, "report", p));
+        a.report_plot = self
+            .report_plot
+            .as_deref()
+            .map(|p| fast_start::staged(dir, "plot", p));
+        a
+    }
+
     /// The files a render reads, which no output may replace.
     fn inputs(&self) -> Vec<(&str, &Path)> {
         super::named([
@@ -153,6 +169,18 @@ fn parse_crop(s: &str) -> std::result::Result<Window, String> {
 }
 
 pub fn run(a: &RenderArgs) -> Result<()> {
+    let cpu_at_start = fast_start::CpuTimes::now();
+    let mode = fast_start::mode()?;
+    // The second process of a fast start writes its outputs to the staging folder.
+    let staged;
+    let asked = a;
+    let a = match fast_start::staging() {
+        Some(dir) => {
+            staged = a.staged(&dir);
+            &staged
+        }
+        None => a,
+    };
     crate::output::check_writable(&a.output)?;
     if a.samples.is_some() || a.crop.is_some() || a.part.is_some() {
         return run_job(a);
@@ -217,7 +245,38 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let bar = progress_bar(a.quiet, spp, a.time);
-    let setup_done = announce_compiles(&ctx, &bar, a.quiet);
+    // A fixed sample count only: under --time the two processes would render different images.
+    let race = (a.time.is_none())
+        .then(|| {
+            let dir = fast_start::folder();
+            let staged = a.staged(&dir);
+            let (sexr, spng) = super::image_paths(&staged.output, a.png).ok()?;
+            let mut outputs = vec![(sexr, exr_path.clone())];
+            outputs.extend(spng.zip(png_path.clone()));
+            outputs.extend(staged.report.clone().zip(a.report.clone()));
+            outputs.extend(staged.report_plot.clone().zip(a.report_plot.clone()));
+            let pixels = u64::from(w) * u64::from(h);
+            FastStart::start(
+                mode,
+                cpu_at_start,
+                &ctx,
+                fast_start::render_bytes(pixels, settings.evaluate_passes),
+                dir,
+                outputs,
+                &bar,
+            )
+        })
+        .flatten()
+        .map(Arc::new);
+    // The second process of a fast start says nothing until its result is taken; this one
+    // stops it once its own kernels have compiled.
+    let setup_done = announce_compiles(
+        &ctx,
+        &bar,
+        a.quiet || fast_start::staging().is_some(),
+        race.clone()
+            .map(|r| Box::new(move || r.take_over()) as Box<dyn Fn() + Send + Sync>),
+    );
     let started = Instant::now();
     let out = renderer.render(&scene, &settings, &mut |done, _| {
         if !setup_done.swap(true, Ordering::SeqCst) {
@@ -231,13 +290,26 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         }
     });
     setup_done.store(true, Ordering::SeqCst);
+    if let Some(r) = &race {
+        r.take_over();
+    }
     ctx.set_kernel_listener(None);
+    drop(race);
     bar.finish_and_clear();
     let mut out = out?;
     let mut meta = image_metadata(&out, &settings, &ctx.info().name);
     if let Some(d) = &denoiser {
         d.add_layer(&mut out.film).map_err(anyhow::Error::msg)?;
         meta.extra.push(("illum.denoiser".into(), d.description()));
+    }
+    if fast_start::staging().is_some() {
+        // The image is the same; its timings are those of the unoptimised kernels.
+        meta.extra.push((
+            "illum.fastStart".into(),
+            "rendered by the second process of a fast start, with the driver's unoptimised \
+             kernels (GALLIVM_PERF=nopt)"
+                .into(),
+        ));
     }
     let s = &out.stats;
     if !s.dark_lights.is_empty() {
@@ -269,9 +341,11 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     {
         failures.push(e.to_string());
     }
-    let written = match &png_path {
-        Some(p) => format!("{} and {}", exr_path.display(), p.display()),
-        None => exr_path.display().to_string(),
+    // The paths asked for (the second process of a fast start says where its image goes).
+    let (shown_exr, shown_png) = super::image_paths(&asked.output, asked.png)?;
+    let written = match &shown_png {
+        Some(p) => format!("{} and {}", shown_exr.display(), p.display()),
+        None => shown_exr.display().to_string(),
     };
     if !a.quiet {
         summary(&out, &scene, &ctx, &written, a.clamp);
@@ -324,17 +398,23 @@ pub(super) fn progress_bar(quiet: bool, spp: u32, time: Option<f64>) -> Progress
 
 /// Says "compiling kernels…" on stderr when the driver is still compiling half a second after the
 /// first kernel was created (the first render of a feature combination on lavapipe: 14–31 s;
-/// later ones hit Mesa's shader cache and say nothing). Returns the flag that the first progress
-/// call (set-up over) sets.
-pub(super) fn announce_compiles(ctx: &Context, bar: &ProgressBar, quiet: bool) -> Arc<AtomicBool> {
+/// later ones hit Mesa's shader cache and say nothing). `compiled` runs once the render's
+/// kernels have compiled. Returns the flag that the first progress call (set-up over) sets.
+pub(super) fn announce_compiles(
+    ctx: &Context,
+    bar: &ProgressBar,
+    quiet: bool,
+    compiled: Option<Box<dyn Fn() + Send + Sync>>,
+) -> Arc<AtomicBool> {
+    use crate::vk::KernelEvent;
     let done = Arc::new(AtomicBool::new(false));
-    if quiet {
-        return done;
-    }
     let started = Arc::new(AtomicBool::new(false));
     let (d, b) = (done.clone(), bar.clone());
-    ctx.set_kernel_listener(Some(Arc::new(move |_name: &str| {
-        if started.swap(true, Ordering::SeqCst) {
+    ctx.set_kernel_listener(Some(Arc::new(move |e| {
+        if let (KernelEvent::Compiled(_), Some(f)) = (e, &compiled) {
+            f();
+        }
+        if quiet || !matches!(e, KernelEvent::Creating(_)) || started.swap(true, Ordering::SeqCst) {
             return;
         }
         let (d, b) = (d.clone(), b.clone());
@@ -556,7 +636,7 @@ fn run_job(a: &RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let bar = progress_bar(a.quiet, spp, None);
-    let setup_done = announce_compiles(&ctx, &bar, a.quiet);
+    let setup_done = announce_compiles(&ctx, &bar, a.quiet, None);
     let started = Instant::now();
     let out = renderer.render(&scene, &settings, &mut |done, budget| {
         if !setup_done.swap(true, Ordering::SeqCst) && !a.quiet {

@@ -179,6 +179,7 @@ impl Setup {
             )
         })?;
         let seconds = warm.elapsed().as_secs_f64();
+        ctx.notify_kernel(crate::vk::KernelEvent::Compiled(self.integrator.name()));
         if crate::vk::kernel_times() {
             crate::note!(
                 "illum: warm-up dispatch of {}: {seconds:.3} s ({:.3} s of process CPU)",

@@ -102,8 +102,10 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
     let renderer = Renderer::new(ctx.clone());
     // Until the first frame, a cold driver cache compiles for seconds: say so (once).
     let said = std::sync::atomic::AtomicBool::new(false);
-    ctx.set_kernel_listener(Some(Arc::new(move |_: &str| {
-        if !said.swap(true, std::sync::atomic::Ordering::SeqCst) {
+    ctx.set_kernel_listener(Some(Arc::new(move |e| {
+        if matches!(e, crate::vk::KernelEvent::Creating(_))
+            && !said.swap(true, std::sync::atomic::Ordering::SeqCst)
+        {
             crate::note!(
                 "illum view: compiling kernels for this scene's features… (the first time a \
                  feature combination is seen this takes up to half a minute on a CPU driver; \

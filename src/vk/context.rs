@@ -71,9 +71,18 @@ pub struct Inner {
     owned: bool,
 }
 
-/// Hears the name of every compute kernel about to be compiled (see
-/// [`Context::set_kernel_listener`]).
-pub type KernelListener = Arc<dyn Fn(&str) + Send + Sync>;
+/// What a kernel listener hears (see [`Context::set_kernel_listener`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelEvent<'a> {
+    /// A compute kernel of this name is about to be created (and compiled then or at its first
+    /// dispatch).
+    Creating(&'a str),
+    /// A render's kernels (this integrator's) have run their warm-up dispatch: compiled.
+    Compiled(&'a str),
+}
+
+/// Hears every [`KernelEvent`] of a context.
+pub type KernelListener = Arc<dyn Fn(KernelEvent<'_>) + Send + Sync>;
 
 /// The Vulkan context every GPU object of illum lives on. Cheap to clone.
 #[derive(Clone)]
@@ -474,10 +483,10 @@ impl Context {
         self.0.debug.is_some()
     }
 
-    /// Calls `listener` with the kernel's name whenever a compute pipeline is created on this
-    /// context: the driver compiles it then or at its first dispatch (lavapipe: up to half a
-    /// minute the first time a feature combination is seen, fast afterwards from Mesa's shader
-    /// cache). None removes the listener.
+    /// Calls `listener` whenever a compute pipeline is created on this context (the driver
+    /// compiles it then or at its first dispatch; lavapipe: up to half a minute the first time a
+    /// feature combination is seen, fast afterwards from Mesa's shader cache) and when a render's
+    /// warm-up dispatch has compiled its kernels. None removes the listener.
     pub fn set_kernel_listener(&self, listener: Option<KernelListener>) {
         if let Ok(mut l) = self.0.kernel_listener.lock() {
             *l = listener;
@@ -496,10 +505,10 @@ impl Context {
         self.builds[1].fetch_add(top as u64, Relaxed);
     }
 
-    pub(crate) fn notify_kernel(&self, name: &str) {
+    pub(crate) fn notify_kernel(&self, event: KernelEvent<'_>) {
         let listener = self.0.kernel_listener.lock().ok().and_then(|l| l.clone());
         if let Some(l) = listener {
-            l(name);
+            l(event);
         }
     }
 }

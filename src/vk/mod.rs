@@ -12,7 +12,7 @@ mod requirements;
 mod timer;
 
 pub use commands::{ImageState, image_barrier};
-pub use context::{Context, ContextOptions, ExternalDevice, KernelListener};
+pub use context::{Context, ContextOptions, ExternalDevice, KernelEvent, KernelListener};
 pub use devices::{DeviceInfo, list_devices};
 pub use error::{Error, VkResultExt};
 pub use gpu_allocator::MemoryLocation;

@@ -28,7 +28,7 @@ impl ComputePipeline {
     ) -> Result<ComputePipeline> {
         let code = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
             .map_err(|e| Error::Invalid(format!("kernel {name}: bad SPIR-V: {e}")))?;
-        ctx.notify_kernel(name);
+        ctx.notify_kernel(crate::vk::KernelEvent::Creating(name));
         let dev = &ctx.device;
         // SAFETY: valid device; the objects are owned by the returned pipeline (or destroyed on
         // error by its Drop, since null handles are ignored by vkDestroy*).

@@ -1,0 +1,440 @@
+//! Fast start on a CPU driver. On lavapipe a kernel's first dispatch waits for LLVM to compile it,
+//! in one thread: 2.3–2.6 s for the default scene's `full` kernel, most of a cold render of a small
+//! image. With its optimisations off (Mesa's `GALLIVM_PERF=nopt`) LLVM takes 0.9 s and the code runs
+//! about 2.7× slower. So, while this process compiles the optimised kernels, a second process (this
+//! program again, with the same arguments) renders the same image with unoptimised kernels on the
+//! core the compile leaves idle, and writes its outputs to a staging folder. Whichever is done
+//! first gives the result: the second process for a short render (its outputs are moved into
+//! place and its messages printed), this one otherwise (it stops the second as soon as its own
+//! kernels have compiled). The pixels are the same either way: without fast-math flags LLVM's
+//! optimisations keep every floating-point result (tests/fast_start.rs renders both ways and
+//! compares them bit for bit). docs/performance-kernels.md, "Fast start", has the figures.
+//!
+//! `ILLUM_FAST_START`: unset, on when the driver is llvmpipe, the sample count is fixed (no
+//! `--time`), a core has been idle since this process started (half a core's worth of idle
+//! time, from /proc/stat) and memory holds two renders; `0` off; `1` on whatever the load; `wait` on, and this process always lets the
+//! second one finish (a test's way to take the second process's path every time).
+
+use anyhow::{Result, bail};
+use indicatif::ProgressBar;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// Names the staging folder in the second process's environment (its presence makes a process
+/// the second one).
+const CHILD_ENV: &str = "ILLUM_FAST_START_CHILD";
+const MODE_ENV: &str = "ILLUM_FAST_START";
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Mode {
+    Off,
+    Auto,
+    On,
+    /// On, and the first process waits for the second whatever happens.
+    Wait,
+}
+
+/// The mode `ILLUM_FAST_START` asks for.
+pub(super) fn mode() -> Result<Mode> {
+    parse_mode(std::env::var(MODE_ENV).ok().as_deref())
+}
+
+fn parse_mode(v: Option<&str>) -> Result<Mode> {
+    Ok(match v {
+        None | Some("") => Mode::Auto,
+        Some("0") | Some("off") => Mode::Off,
+        Some("1") | Some("on") => Mode::On,
+        Some("wait") => Mode::Wait,
+        Some(other) => bail!(
+            "environment variable {MODE_ENV}={other:?}: expected 0 (off), 1 (on whatever the \
+             load), wait (on, and wait for the second process) or nothing (automatic)"
+        ),
+    })
+}
+
+/// The staging folder when this process is the second one of a fast start.
+pub(super) fn staging() -> Option<PathBuf> {
+    std::env::var_os(CHILD_ENV).map(PathBuf::from)
+}
+
+/// Where the second process writes the output `p` of kind `kind` ("image", "report", "plot"):
+/// the folder, the kind and the file name, so that outputs of one name in two folders do not meet.
+pub(super) fn staged(dir: &Path, kind: &str, p: &Path) -> PathBuf {
+    let name = p.file_name().map_or_else(
+        || "output".to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    dir.join(format!("{kind}-{name}"))
+}
+
+/// Idle and total CPU time of all cores (/proc/stat's first line, in clock ticks).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CpuTimes {
+    idle: u64,
+    total: u64,
+}
+
+impl CpuTimes {
+    pub(super) fn now() -> Option<CpuTimes> {
+        let stat = std::fs::read_to_string("/proc/stat").ok()?;
+        parse_cpu_line(stat.lines().next()?)
+    }
+}
+
+fn parse_cpu_line(line: &str) -> Option<CpuTimes> {
+    let mut f = line.split_whitespace();
+    (f.next()? == "cpu").then_some(())?;
+    let v: Vec<u64> = f.map_while(|x| x.parse().ok()).collect();
+    // user nice system idle iowait irq softirq steal (guest time is already in user).
+    let total = v.iter().take(8).sum();
+    Some(CpuTimes {
+        idle: v.get(3)? + v.get(4).unwrap_or(&0),
+        total,
+    })
+}
+
+/// Whether a core has been idle since `since` (this process's start, which has kept one core
+/// busy): idle time worth at least half a core. Without a long enough interval, whether the
+/// 1-minute load average leaves a core.
+fn idle_core(since: Option<CpuTimes>) -> bool {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if cores < 2 {
+        return false;
+    }
+    if let (Some(a), Some(b)) = (since, CpuTimes::now())
+        && b.total >= a.total + 8
+    {
+        return idle_cores(a, b, cores) >= 0.5;
+    }
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok());
+    load.is_some_and(|l| l <= cores as f64 - 1.0)
+}
+
+/// Cores' worth of idle time between two readings.
+fn idle_cores(a: CpuTimes, b: CpuTimes, cores: usize) -> f64 {
+    let total = b.total.saturating_sub(a.total).max(1) as f64;
+    cores as f64 * b.idle.saturating_sub(a.idle) as f64 / total
+}
+
+/// The host memory a render of `pixels` pixels may take (16 AOV planes: more than any
+/// integrator declares), to tell whether a second one fits beside it.
+pub(super) fn render_bytes(pixels: u64, evaluate: bool) -> u64 {
+    use crate::film::memory::{PROCESS_BYTES, film_bytes};
+    PROCESS_BYTES + film_bytes(pixels, 16, evaluate, false)
+}
+
+#[derive(Debug)]
+enum State {
+    Running(Child),
+    /// The second process finished first: its outputs are being moved, then the process ends.
+    SecondWon,
+    /// This process goes on alone (it took over, or the second process failed or was refused).
+    Over,
+}
+
+/// A second process rendering the same image with unoptimised kernels (see the module's text).
+pub(super) struct FastStart {
+    state: Arc<Mutex<State>>,
+    dir: PathBuf,
+    mode: Mode,
+}
+
+/// Outputs of the render: (where the second process writes it, where it belongs).
+pub(super) type Outputs = Vec<(PathBuf, PathBuf)>;
+
+impl FastStart {
+    /// Starts the second process where `mode` and the machine allow it (`since`: CPU times at
+    /// this process's start, to tell whether a core is idle; `bytes`: what one render takes, see
+    /// [`render_bytes`]); `dir` is its staging
+    /// folder (see [`folder`]), `outputs` the files it will write there. `ctx` is this process's
+    /// device (only llvmpipe compiles at the first dispatch). `bar` is cleared before the second
+    /// process's messages are printed.
+    pub(super) fn start(
+        mode: Mode,
+        since: Option<CpuTimes>,
+        ctx: &crate::vk::Context,
+        bytes: u64,
+        dir: PathBuf,
+        outputs: Outputs,
+        bar: &ProgressBar,
+    ) -> Option<FastStart> {
+        let llvmpipe = ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE;
+        let allowed = match mode {
+            Mode::Off => false,
+            Mode::Auto => {
+                idle_core(since)
+                    && crate::film::memory::available_bytes().is_some_and(|a| a / 2 >= bytes)
+            }
+            Mode::On | Mode::Wait => true,
+        };
+        if !llvmpipe || !allowed || staging().is_some() {
+            return None;
+        }
+        let (child, out, err) = match std::fs::create_dir_all(&dir).and_then(|()| spawn(&dir)) {
+            Ok(c) => c,
+            Err(e) => {
+                crate::note!("illum: note: no fast start (the second process did not start: {e})");
+                let _ = std::fs::remove_dir_all(&dir);
+                return None;
+            }
+        };
+        let state = Arc::new(Mutex::new(State::Running(child)));
+        let (s, d, b) = (state.clone(), dir.clone(), bar.clone());
+        std::thread::spawn(move || watch(&s, &d, &outputs, out, err, &b));
+        Some(FastStart { state, dir, mode })
+    }
+
+    /// This process's kernels have compiled: stop the second process, unless it already won (then
+    /// this never returns: its result is being written and the process ends). With
+    /// `ILLUM_FAST_START=wait`, let it finish first.
+    pub(super) fn take_over(&self) {
+        self.settle(self.mode == Mode::Wait);
+    }
+
+    /// Waits until the race is decided for this process: kills a running second process (or,
+    /// `wait`ing, waits for it), and blocks for good if the second process won.
+    fn settle(&self, wait: bool) {
+        loop {
+            let mut state = lock(&self.state);
+            match &mut *state {
+                State::Running(child) if !wait => {
+                    let _ = child.kill();
+                    let _ = child.wait();
+                    *state = State::Over;
+                    return;
+                }
+                State::Over => return,
+                // The watcher decides: it ends the process, or gives up and says Over.
+                State::Running(_) | State::SecondWon => {}
+            }
+            drop(state);
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+impl Drop for FastStart {
+    fn drop(&mut self) {
+        self.settle(false);
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn lock(m: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The staging folder of this process's second process.
+pub(super) fn folder() -> PathBuf {
+    std::env::temp_dir().join(format!("illum-fast-start-{}", std::process::id()))
+}
+
+/// Polls the second process. When it succeeds first, moves its outputs into place, prints its
+/// messages and ends this process with its status (0). When it fails, says so and leaves the
+/// render to this process.
+fn watch(
+    state: &Mutex<State>,
+    dir: &Path,
+    outputs: &Outputs,
+    out: Capture,
+    err: Capture,
+    bar: &ProgressBar,
+) {
+    let status = loop {
+        std::thread::sleep(Duration::from_millis(10));
+        let mut s = lock(state);
+        let State::Running(child) = &mut *s else {
+            return; // this process took over
+        };
+        match child.try_wait() {
+            Ok(None) => continue,
+            // After a Ctrl-C or SIGTERM this process writes what it has and says so in its
+            // exit status: the second process's image would hide the interruption.
+            Ok(Some(status)) if status.success() && super::signal::received().is_none() => {
+                *s = State::SecondWon;
+                break status;
+            }
+            Ok(Some(_)) if super::signal::received().is_some() => {
+                *s = State::Over;
+                return;
+            }
+            Ok(Some(status)) => {
+                *s = State::Over;
+                drop(s);
+                let text = String::from_utf8_lossy(&err.join().unwrap_or_default()).into_owned();
+                let last = text
+                    .lines()
+                    .rev()
+                    .find(|l| !l.trim().is_empty())
+                    .unwrap_or("");
+                bar.suspend(|| {
+                    crate::note!(
+                        "illum: note: the fast-start process (unoptimised kernels) failed \
+                         ({status}): {last}; this process renders the image"
+                    )
+                });
+                return;
+            }
+            Err(e) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                *s = State::Over;
+                drop(s);
+                bar.suspend(|| crate::note!("illum: note: the fast-start process was lost: {e}"));
+                return;
+            }
+        }
+    };
+    if let Err(e) = outputs.iter().try_for_each(|(from, to)| place(from, to)) {
+        *lock(state) = State::Over;
+        bar.suspend(|| {
+            crate::note!(
+                "illum: note: the fast-start process's image could not be moved into place \
+                 ({e}); this process renders it"
+            )
+        });
+        return;
+    }
+    bar.finish_and_clear();
+    let (o, e) = (
+        out.join().unwrap_or_default(),
+        err.join().unwrap_or_default(),
+    );
+    let mut stdout = std::io::stdout().lock();
+    let _ = stdout.write_all(&o);
+    let _ = stdout.flush();
+    let mut stderr = std::io::stderr().lock();
+    let _ = stderr.write_all(&e);
+    if !e.is_empty() {
+        let _ = writeln!(
+            stderr,
+            "illum: fast start: this image is the second process's, rendered with the driver's \
+             unoptimised kernels (GALLIVM_PERF=nopt) before the optimised ones had compiled; the \
+             same pixels"
+        );
+    }
+    let _ = stderr.flush();
+    let _ = std::fs::remove_dir_all(dir);
+    // SAFETY: ends the process at once. Not exit(): its handlers would wait for the driver's
+    // queue thread, which is still compiling the kernels this process no longer needs.
+    unsafe { libc::_exit(status.code().unwrap_or(0)) }
+}
+
+/// Moves a staged output to where it belongs: a rename, or across file systems a copy beside the
+/// destination renamed over it (a reader never sees half a file).
+fn place(from: &Path, to: &Path) -> std::io::Result<()> {
+    if std::fs::rename(from, to).is_ok() {
+        return Ok(());
+    }
+    let tmp = to.with_extension(format!("fast-start-{}", std::process::id()));
+    let copied = std::fs::copy(from, &tmp).and_then(|_| std::fs::rename(&tmp, to));
+    if copied.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    copied.map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", to.display())))
+}
+
+type Capture = JoinHandle<Vec<u8>>;
+
+/// The second process: this program with the same arguments, the staging folder in its
+/// environment, LLVM's optimisations off, the lowest CPU priority, its own process group (a
+/// Ctrl-C at the terminal goes to this process, which stops it), killed if this process dies
+/// first.
+fn spawn(dir: &Path) -> std::io::Result<(Child, Capture, Capture)> {
+    use std::os::unix::process::CommandExt;
+    let exe = std::env::current_exe()?;
+    let perf = match std::env::var("GALLIVM_PERF") {
+        Ok(v) if !v.is_empty() => format!("{v},nopt"),
+        _ => "nopt".to_string(),
+    };
+    let mut cmd = Command::new(exe);
+    cmd.args(std::env::args_os().skip(1))
+        .env(CHILD_ENV, dir)
+        .env("GALLIVM_PERF", perf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .process_group(0);
+    // SAFETY: prctl and setpriority are async-signal-safe; nothing else runs between fork and
+    // exec.
+    unsafe {
+        cmd.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            // The lowest priority: the second process takes the time this one leaves idle, and
+            // never slows the compile it races (its render threads would).
+            if libc::setpriority(libc::PRIO_PROCESS, 0, 19) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let mut child = cmd.spawn()?;
+    let capture = |r: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            if let Some(mut r) = r {
+                let _ = r.read_to_end(&mut buf);
+            }
+            buf
+        })
+    };
+    let out = capture(
+        child
+            .stdout
+            .take()
+            .map(|s| Box::new(s) as Box<dyn Read + Send>),
+    );
+    let err = capture(
+        child
+            .stderr
+            .take()
+            .map(|s| Box::new(s) as Box<dyn Read + Send>),
+    );
+    Ok((child, out, err))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modes_parse_and_a_bad_one_is_named() {
+        assert_eq!(parse_mode(None).unwrap(), Mode::Auto);
+        assert_eq!(parse_mode(Some("0")).unwrap(), Mode::Off);
+        assert_eq!(parse_mode(Some("1")).unwrap(), Mode::On);
+        assert_eq!(parse_mode(Some("wait")).unwrap(), Mode::Wait);
+        let e = parse_mode(Some("yes")).unwrap_err().to_string();
+        assert!(e.contains("ILLUM_FAST_START=\"yes\""), "{e}");
+    }
+
+    #[test]
+    fn idle_time_is_counted_in_cores() {
+        let a = parse_cpu_line("cpu  100 0 50 1000 10 0 0 0 0 0").unwrap();
+        // 40 ticks on 2 cores: 20 busy, 18 idle and 2 waiting: one core's worth idle.
+        let b = parse_cpu_line("cpu  115 0 55 1018 12 0 0 0 0 0").unwrap();
+        assert_eq!((a.idle, a.total), (1010, 1160));
+        assert!((idle_cores(a, b, 2) - 1.0).abs() < 1e-12);
+        assert!(parse_cpu_line("cpu0 1 2 3 4").is_none());
+    }
+
+    #[test]
+    fn staged_outputs_keep_kind_and_name() {
+        let d = Path::new("/s");
+        assert_eq!(
+            staged(d, "image", Path::new("out/a.png")),
+            Path::new("/s/image-a.png")
+        );
+        assert_eq!(
+            staged(d, "plot", Path::new("b/a.png")),
+            Path::new("/s/plot-a.png")
+        );
+    }
+}

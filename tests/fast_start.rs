@@ -1,0 +1,190 @@
+//! Fast start (src/cli/fast_start.rs): on lavapipe a second process renders the image with the
+//! driver's unoptimised kernels while the first compiles the optimised ones. Its premise is that
+//! both give the same pixels; these tests check it on kernels of different features, then check
+//! the second process's result taking the outputs' places, and a race left to the clock.
+
+mod common;
+use common::{illum_command, temp_path};
+use std::path::Path;
+
+/// Runs illum with `env` set: (exit code, stderr).
+fn run(args: &[&str], env: &[(&str, &str)]) -> (i32, String) {
+    let mut c = illum_command();
+    c.args(args);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    let out = c.output().expect("running illum");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Every channel of two EXRs, compared bit for bit.
+fn assert_same_pixels(a: &Path, b: &Path, what: &str) {
+    let (a, b) = (
+        illum::output::read_exr(a).expect("first image"),
+        illum::output::read_exr(b).expect("second image"),
+    );
+    assert_eq!(a.channels.len(), b.channels.len(), "{what}: channel lists");
+    for ((na, va), (nb, vb)) in a.channels.iter().zip(&b.channels) {
+        assert_eq!(na, nb, "{what}: channel names");
+        let differ = va
+            .iter()
+            .zip(vb)
+            .filter(|(x, y)| x.to_bits() != y.to_bits())
+            .count();
+        assert_eq!(differ, 0, "{what}: {differ} samples of {na} differ");
+    }
+}
+
+/// The premise: LLVM's optimisations (off with GALLIVM_PERF=nopt) change no pixel. Kernels of
+/// different features: the radiosity cache and caustic paths (`full`), path tracing, direct
+/// lighting with many lights and a dome, and a USD stage's meshes and textures.
+#[test]
+fn unoptimised_kernels_render_the_same_pixels() {
+    let scenes = [
+        ("default-full", "scenes/default.json", "full"),
+        ("interior-path", "scenes/interior.json", "path"),
+        ("veach-direct", "scenes/veach.json", "direct"),
+        ("lookdev-full", "scenes/lookdev.usda", "full"),
+    ];
+    for (name, scene, integrator) in scenes {
+        let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
+        let mut images = Vec::new();
+        for perf in ["", "nopt"] {
+            let out = temp_path(&format!("fast-start-{name}-{perf}.exr"));
+            let o = out.to_str().unwrap().to_string();
+            let args = [
+                "render",
+                scene.to_str().unwrap(),
+                "--integrator",
+                integrator,
+                "--width",
+                "48",
+                "--height",
+                "32",
+                "--spp",
+                "4",
+                "--quiet",
+                "-o",
+                &o,
+            ];
+            let (code, err) = run(&args, &[("ILLUM_FAST_START", "0"), ("GALLIVM_PERF", perf)]);
+            assert_eq!(code, 0, "{name} with GALLIVM_PERF={perf:?}:\n{err}");
+            images.push(out);
+        }
+        assert_same_pixels(&images[0], &images[1], name);
+    }
+}
+
+/// `ILLUM_FAST_START=wait` makes the second process give the result every time: its EXR, PNG,
+/// report and plot take the places asked for, the staging folder is gone, the summary names the
+/// files asked for, and the pixels are those of a render without a fast start.
+#[test]
+fn the_second_process_result_takes_the_outputs_places() {
+    let png = temp_path("fast-start-wait.png");
+    let csv = temp_path("fast-start-wait.csv");
+    let plot = temp_path("fast-start-wait-plot.png");
+    let plain = temp_path("fast-start-plain.exr");
+    let (p, c, q) = (
+        png.to_str().unwrap(),
+        csv.to_str().unwrap(),
+        plot.to_str().unwrap(),
+    );
+    let common = ["render", "--width", "64", "--height", "32", "--spp", "2"];
+    let mut child = illum_command();
+    child
+        .args(common)
+        .args(["-o", p, "--report", c, "--report-plot", q])
+        .env("ILLUM_FAST_START", "wait")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+    let spawned = child.spawn().expect("running illum");
+    let pid = spawned.id();
+    let out = spawned.wait_with_output().expect("illum ran");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("fast start: this image is the second process's"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "wrote {} and {p}",
+            png.with_extension("exr").display()
+        )),
+        "{err}"
+    );
+    for f in [&png, &png.with_extension("exr"), &csv, &plot] {
+        assert!(f.is_file(), "{} was not written:\n{err}", f.display());
+    }
+    let staging = std::env::temp_dir().join(format!("illum-fast-start-{pid}"));
+    assert!(!staging.exists(), "{} was left behind", staging.display());
+    let exr = illum::output::read_exr(&png.with_extension("exr")).unwrap();
+    assert!(
+        exr.attributes.iter().any(|(k, _)| k == "illum.fastStart"),
+        "the header does not say whose image it is"
+    );
+    let report = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(report.lines().count(), 1 + 2, "a row per pass:\n{report}");
+
+    let (code, err) = run(
+        &[&common[..], &["--quiet", "-o", plain.to_str().unwrap()]].concat(),
+        &[("ILLUM_FAST_START", "0")],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_same_pixels(
+        &png.with_extension("exr"),
+        &plain,
+        "fast start against none",
+    );
+}
+
+/// Left to the clock (`ILLUM_FAST_START=1`: on whatever the load), either process may give the
+/// image; it is the same image. Under --time there is
+/// no second process (the two would render different sample counts), nor with a bad setting,
+/// which is named.
+#[test]
+fn a_race_gives_the_same_image_and_time_budgets_take_none() {
+    let raced = temp_path("fast-start-race.exr");
+    let plain = temp_path("fast-start-race-plain.exr");
+    let args = [
+        "render", "--width", "40", "--height", "24", "--spp", "3", "--quiet", "-o",
+    ];
+    for (out, mode) in [(&raced, "1"), (&plain, "0")] {
+        let a = [&args[..], &[out.to_str().unwrap()]].concat();
+        let (code, err) = run(&a, &[("ILLUM_FAST_START", mode)]);
+        assert_eq!(code, 0, "ILLUM_FAST_START={mode}:\n{err}");
+    }
+    assert_same_pixels(&raced, &plain, "a race against none");
+
+    let timed = temp_path("fast-start-timed.exr");
+    let (code, err) = run(
+        &[
+            "render",
+            "--width",
+            "32",
+            "--height",
+            "16",
+            "--time",
+            "0.2",
+            "-o",
+            timed.to_str().unwrap(),
+        ],
+        &[("ILLUM_FAST_START", "wait")],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        !err.contains("fast start"),
+        "a time budget took a second process:\n{err}"
+    );
+
+    let (code, err) = run(
+        &["render", "--spp", "1", "-o", timed.to_str().unwrap()],
+        &[("ILLUM_FAST_START", "maybe")],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("ILLUM_FAST_START=\"maybe\""), "{err}");
+}
