@@ -151,8 +151,8 @@ pub(super) type Outputs = Vec<(PathBuf, PathBuf)>;
 impl FastStart {
     /// Starts the second process where `mode` and the machine allow it (`since`: CPU times at
     /// this process's start, to tell whether a core is idle; `bytes`: what one render takes, see
-    /// [`render_bytes`]); `dir` is its staging
-    /// folder (see [`folder`]), `outputs` the files it will write there. `ctx` is this process's
+    /// [`render_bytes`]); `outputs` gives, for its staging folder, the files it will write there
+    /// and where each belongs. `ctx` is this process's
     /// device (only llvmpipe compiles at the first dispatch). `bar` is cleared before the second
     /// process's messages are printed.
     pub(super) fn start(
@@ -160,8 +160,7 @@ impl FastStart {
         since: Option<CpuTimes>,
         ctx: &crate::vk::Context,
         bytes: u64,
-        dir: PathBuf,
-        outputs: Outputs,
+        outputs: impl FnOnce(&Path) -> Outputs,
         bar: &ProgressBar,
     ) -> Option<FastStart> {
         let llvmpipe = ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE;
@@ -176,7 +175,15 @@ impl FastStart {
         if !llvmpipe || !allowed || staging().is_some() {
             return None;
         }
-        let (child, out, err) = match std::fs::create_dir_all(&dir).and_then(|()| spawn(&dir)) {
+        let dir = match folder() {
+            Ok(d) => d,
+            Err(e) => {
+                crate::note!("illum: note: no fast start (no staging folder: {e})");
+                return None;
+            }
+        };
+        let outputs = outputs(&dir);
+        let (child, out, err) = match spawn(&dir) {
             Ok(c) => c,
             Err(e) => {
                 crate::note!("illum: note: no fast start (the second process did not start: {e})");
@@ -230,9 +237,17 @@ fn lock(m: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// The staging folder of this process's second process.
-pub(super) fn folder() -> PathBuf {
-    std::env::temp_dir().join(format!("illum-fast-start-{}", std::process::id()))
+/// Creates the staging folder of this process's second process: a new one, private (0700),
+/// never a name that exists already (one made by another user could lead elsewhere).
+fn folder() -> std::io::Result<PathBuf> {
+    use std::os::unix::fs::DirBuilderExt;
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    let name = format!("illum-fast-start-{}-{nanos:09}", std::process::id());
+    let dir = std::env::temp_dir().join(name);
+    std::fs::DirBuilder::new().mode(0o700).create(&dir)?;
+    Ok(dir)
 }
 
 /// Polls the second process. When it succeeds first, moves its outputs into place, prints its

@@ -248,21 +248,23 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     // A fixed sample count only: under --time the two processes would render different images.
     let race = (a.time.is_none())
         .then(|| {
-            let dir = fast_start::folder();
-            let staged = a.staged(&dir);
-            let (sexr, spng) = super::image_paths(&staged.output, a.png).ok()?;
-            let mut outputs = vec![(sexr, exr_path.clone())];
-            outputs.extend(spng.zip(png_path.clone()));
-            outputs.extend(staged.report.clone().zip(a.report.clone()));
-            outputs.extend(staged.report_plot.clone().zip(a.report_plot.clone()));
+            let staged_outputs = |dir: &Path| {
+                let staged = a.staged(dir);
+                let (sexr, spng) = super::image_paths(&staged.output, a.png)
+                    .expect("the same extension as the output checked above");
+                let mut outputs = vec![(sexr, exr_path.clone())];
+                outputs.extend(spng.zip(png_path.clone()));
+                outputs.extend(staged.report.clone().zip(a.report.clone()));
+                outputs.extend(staged.report_plot.clone().zip(a.report_plot.clone()));
+                outputs
+            };
             let pixels = u64::from(w) * u64::from(h);
             FastStart::start(
                 mode,
                 cpu_at_start,
                 &ctx,
                 fast_start::render_bytes(pixels, settings.evaluate_passes),
-                dir,
-                outputs,
+                staged_outputs,
                 &bar,
             )
         })
