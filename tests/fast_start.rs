@@ -94,11 +94,15 @@ fn the_second_process_result_takes_the_outputs_places() {
         plot.to_str().unwrap(),
     );
     let common = ["render", "--width", "64", "--height", "32", "--spp", "2"];
+    // A Mesa cache of its own, to see the optimised kernels reach it after the command ended.
+    let cache = temp_path("fast-start-mesa-cache");
+    std::fs::create_dir_all(&cache).unwrap();
     let mut child = illum_command();
     child
         .args(common)
         .args(["-o", p, "--report", c, "--report-plot", q])
         .env("ILLUM_FAST_START", "wait")
+        .env("MESA_SHADER_CACHE_DIR", &cache)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped());
     let spawned = child.spawn().expect("running illum");
@@ -127,6 +131,22 @@ fn the_second_process_result_takes_the_outputs_places() {
         .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
         .collect();
     assert!(left.is_empty(), "staging folders left behind: {left:?}");
+    // The optimised kernels, never compiled by the command (the second process won), are
+    // compiled by a process it left in the background: the cache grows once more after it ends.
+    let cached = folder_bytes(&cache);
+    let background = background_compile(p);
+    assert!(
+        background.is_some(),
+        "no background compile of the optimised kernels"
+    );
+    let t = std::time::Instant::now();
+    while background.as_ref().is_some_and(|b| running(b)) && t.elapsed().as_secs() < 240 {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    assert!(
+        folder_bytes(&cache) > cached,
+        "the background compile added nothing to Mesa's cache ({cached} bytes)"
+    );
     let exr = illum::output::read_exr(&png.with_extension("exr")).unwrap();
     assert!(
         exr.attributes.iter().any(|(k, _)| k == "illum.fastStart"),
@@ -192,4 +212,41 @@ fn a_race_gives_the_same_image_and_time_budgets_take_none() {
     );
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("ILLUM_FAST_START=\"maybe\""), "{err}");
+}
+
+/// Bytes of the files under a folder.
+fn folder_bytes(dir: &Path) -> u64 {
+    std::fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .filter_map(|e| e.ok())
+                .map(|e| match e.file_type() {
+                    Ok(t) if t.is_dir() => folder_bytes(&e.path()),
+                    _ => e.metadata().map_or(0, |m| m.len()),
+                })
+                .sum()
+        })
+        .unwrap_or(0)
+}
+
+/// The /proc folder of the background compile a fast start left for the render writing `out`.
+fn background_compile(out: &str) -> Option<std::path::PathBuf> {
+    std::fs::read_dir("/proc")
+        .ok()?
+        .filter_map(|e| e.ok())
+        .find_map(|e| {
+            let environ = std::fs::read(e.path().join("environ")).ok()?;
+            let cmdline = std::fs::read(e.path().join("cmdline")).ok()?;
+            let has = |hay: &[u8], needle: &[u8]| hay.windows(needle.len()).any(|w| w == needle);
+            (has(&environ, b"ILLUM_FAST_START_COMPILE=1") && has(&cmdline, out.as_bytes()))
+                .then(|| e.path())
+        })
+}
+
+/// Whether the process of a /proc folder still runs (a zombie, not yet reaped, does not).
+fn running(proc_dir: &Path) -> bool {
+    std::fs::read_to_string(proc_dir.join("stat"))
+        .ok()
+        .and_then(|s| s.rsplit_once(") ").map(|(_, rest)| !rest.starts_with('Z')))
+        .unwrap_or(false)
 }

@@ -92,7 +92,16 @@ struct Viewer {
 
 impl Viewer {
     fn start(x: &Xvfb, args: &[&str]) -> Viewer {
-        let mut child = illum_command()
+        Viewer::start_with(x, args, &[])
+    }
+
+    /// `start` with environment variables set.
+    fn start_with(x: &Xvfb, args: &[&str], env: &[(&str, &str)]) -> Viewer {
+        let mut command = illum_command();
+        for (k, v) in env {
+            command.env(k, v);
+        }
+        let mut child = command
             .env("DISPLAY", &x.display)
             .arg("view")
             .args(args)
@@ -283,6 +292,37 @@ fn the_view_saves_and_shows_what_render_writes() {
         |e: &illum::output::ExrImage| e.attributes.iter().find(|a| a.0 == "illum.spp").cloned();
     assert_eq!(spp(&view), spp(&exr));
     assert_shows(&shot, &png, "the converged frame");
+}
+
+/// The fast start (src/cli/fast_start.rs), made to wait for its second process: the first frame
+/// is that process's one-sample image, shown before the view's own first frame; the view then
+/// converges to what render writes, as without it.
+#[test]
+fn a_fast_start_shows_the_second_process_image_first() {
+    let x = Xvfb::start();
+    let scene = scene_file("fast-start.json", SCENE);
+    let saved = temp_path("fast-start-view.exr");
+    let (s, o) = (scene.to_str().unwrap(), saved.to_str().unwrap());
+    let args = [
+        s,
+        "--spp",
+        "8",
+        "--scale",
+        "1",
+        "--save-at-exit",
+        "-o",
+        o,
+        "--frames",
+        "30",
+    ];
+    let mut v = Viewer::start_with(&x, &args, &[("ILLUM_FAST_START", "wait")]);
+    let first = v.wait_for("first frame");
+    assert!(first.contains("from a second process"), "{first}");
+    v.wait_for("own first frame");
+    let (code, log) = v.wait();
+    assert_eq!(code, 0, "{}", log.join("\n"));
+    let (exr, _) = render(&scene, 8, "fast-start-render");
+    assert_same_pixels(&read(&saved), &exr, "saved after a fast start");
 }
 
 #[test]

@@ -10,9 +10,12 @@
 //! optimisations keep every floating-point result (tests/fast_start.rs renders both ways and
 //! compares them bit for bit). docs/performance-kernels.md, "Fast start", has the figures.
 //!
+//! When the second process won, the optimised kernels are compiled into Mesa's cache by a third
+//! process left in the background, so that the next render starts warm.
+//!
 //! `ILLUM_FAST_START`: unset, on when the driver is llvmpipe, the sample count is fixed (no
-//! `--time`), a core has been idle since this process started (half a core's worth of idle
-//! time, from /proc/stat) and memory holds two renders; `0` off; `1` on whatever the load; `wait` on, and this process always lets the
+//! `--time`), a core has been idle since this process started (half a core's worth of idle or
+//! niced time, from /proc/stat) and memory holds two renders; `0` off; `1` on whatever the load; `wait` on, and this process always lets the
 //! second one finish (a test's way to take the second process's path every time).
 
 use anyhow::{Result, bail};
@@ -89,10 +92,12 @@ fn parse_cpu_line(line: &str) -> Option<CpuTimes> {
     let mut f = line.split_whitespace();
     (f.next()? == "cpu").then_some(())?;
     let v: Vec<u64> = f.map_while(|x| x.parse().ok()).collect();
-    // user nice system idle iowait irq softirq steal (guest time is already in user).
+    // user nice system idle iowait irq softirq steal (guest time is already in user). Time of
+    // niced processes counts as idle: they yield to this one and its second process (a
+    // background compile of an earlier fast start runs at nice 19).
     let total = v.iter().take(8).sum();
     Some(CpuTimes {
-        idle: v.get(3)? + v.get(4).unwrap_or(&0),
+        idle: v.get(3)? + v.get(4).unwrap_or(&0) + v.get(1)?,
         total,
     })
 }
@@ -163,16 +168,7 @@ impl FastStart {
         outputs: impl FnOnce(&Path) -> Outputs,
         bar: &ProgressBar,
     ) -> Option<FastStart> {
-        let llvmpipe = ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE;
-        let allowed = match mode {
-            Mode::Off => false,
-            Mode::Auto => {
-                idle_core(since)
-                    && crate::film::memory::available_bytes().is_some_and(|a| a / 2 >= bytes)
-            }
-            Mode::On | Mode::Wait => true,
-        };
-        if !llvmpipe || !allowed || staging().is_some() {
+        if !wanted(mode, since, ctx, bytes) {
             return None;
         }
         let dir = match folder() {
@@ -235,6 +231,21 @@ impl Drop for FastStart {
 
 fn lock(m: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
     m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Whether a second process runs: on llvmpipe, where `mode` and the machine allow it, and never
+/// from a second process.
+fn wanted(mode: Mode, since: Option<CpuTimes>, ctx: &crate::vk::Context, bytes: u64) -> bool {
+    let llvmpipe = ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE;
+    let allowed = match mode {
+        Mode::Off => false,
+        Mode::Auto => {
+            idle_core(since)
+                && crate::film::memory::available_bytes().is_some_and(|a| a / 2 >= bytes)
+        }
+        Mode::On | Mode::Wait => true,
+    };
+    llvmpipe && allowed && staging().is_none()
 }
 
 /// Creates the staging folder of this process's second process: a new one, private (0700),
@@ -336,9 +347,52 @@ fn watch(
     }
     let _ = stderr.flush();
     let _ = std::fs::remove_dir_all(dir);
+    compile_in_background();
     // SAFETY: ends the process at once. Not exit(): its handlers would wait for the driver's
-    // queue thread, which is still compiling the kernels this process no longer needs.
+    // queue thread, which is still compiling kernels that `compile_in_background` now compiles.
     unsafe { libc::_exit(status.code().unwrap_or(0)) }
+}
+
+/// Set in the environment of the process that [`compile_in_background`] starts.
+const COMPILE_ENV: &str = "ILLUM_FAST_START_COMPILE";
+
+/// Whether this process only compiles the optimised kernels into the driver's cache (see
+/// [`compile_in_background`]).
+pub(super) fn compile_only() -> bool {
+    std::env::var_os(COMPILE_ENV).is_some()
+}
+
+/// When the second process won, the optimised kernels were never compiled, so Mesa's disk cache
+/// does not have them and the next render of these features would compile them again (and the
+/// next short one race again, at 1.2–1.5 s where a warm start takes 1 s). This process's last
+/// act: start this program again with the same arguments to compile them and nothing else, in
+/// the background (its own session, the lowest priority, no output), and not wait for it. Not
+/// where Mesa's cache is off.
+fn compile_in_background() {
+    use std::os::unix::process::CommandExt;
+    let off = |k| std::env::var(k).is_ok_and(|v| matches!(v.as_str(), "1" | "true" | "yes"));
+    if off("MESA_SHADER_CACHE_DISABLE") || off("MESA_DISK_CACHE_DISABLE") {
+        return;
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    let mut cmd = Command::new(exe);
+    cmd.args(std::env::args_os().skip(1))
+        .env(COMPILE_ENV, "1")
+        .env(MODE_ENV, "0")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
+    // SAFETY: setsid and setpriority are async-signal-safe.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::setsid();
+            libc::setpriority(libc::PRIO_PROCESS, 0, 19);
+            Ok(())
+        });
+    }
+    let _ = cmd.spawn();
 }
 
 /// Moves a staged output to where it belongs: a rename, or across file systems a copy beside the
@@ -416,6 +470,110 @@ fn spawn(dir: &Path) -> std::io::Result<(Child, Capture, Capture)> {
     Ok((child, out, err))
 }
 
+/// The view's fast start: a second process (this program with the same `view` arguments) renders
+/// the view's first image, one sample a pixel, with unoptimised kernels, to show while the view
+/// compiles its own (src/view/early.rs).
+pub(super) struct FirstView {
+    child: Option<(Child, Capture)>,
+    dir: PathBuf,
+    mode: Mode,
+    size: (u32, u32),
+}
+
+/// The image the second process of a view writes in its staging folder.
+pub(super) fn first_view_image(dir: &Path) -> PathBuf {
+    dir.join("first.exr")
+}
+
+impl FirstView {
+    /// Starts the second process where `mode` and the machine allow it (as [`FastStart::start`])
+    /// for an image of `width` x `height`.
+    pub(super) fn start(
+        mode: Mode,
+        since: Option<CpuTimes>,
+        ctx: &crate::vk::Context,
+        (width, height): (u32, u32),
+    ) -> Option<FirstView> {
+        let bytes = render_bytes(u64::from(width) * u64::from(height), false);
+        if !wanted(mode, since, ctx, bytes) {
+            return None;
+        }
+        let dir = folder().ok()?;
+        match spawn(&dir) {
+            Ok((child, _, err)) => Some(FirstView {
+                child: Some((child, err)),
+                dir,
+                mode,
+                size: (width, height),
+            }),
+            Err(e) => {
+                crate::note!(
+                    "illum view: note: no fast start (the second process did not start: {e})"
+                );
+                let _ = std::fs::remove_dir_all(&dir);
+                None
+            }
+        }
+    }
+}
+
+impl crate::view::EarlyImage for FirstView {
+    fn poll(&mut self) -> Option<Vec<[f32; 3]>> {
+        let (child, _) = self.child.as_mut()?;
+        let status = match child.try_wait() {
+            Ok(None) => return None,
+            Ok(Some(s)) => s,
+            Err(_) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                self.child = None;
+                return None;
+            }
+        };
+        let (_, err) = self.child.take()?;
+        let image = first_view_image(&self.dir);
+        let read = if status.success() {
+            crate::output::read_reference(&image, self.size.0, self.size.1)
+                .map_err(|e| e.to_string())
+        } else {
+            let text = String::from_utf8_lossy(&err.join().unwrap_or_default()).into_owned();
+            Err(format!(
+                "{status}: {}",
+                text.lines()
+                    .rev()
+                    .find(|l| !l.trim().is_empty())
+                    .unwrap_or("")
+            ))
+        };
+        read.map_err(|e| {
+            crate::note!("illum view: note: the fast start's second process failed ({e})")
+        })
+        .ok()
+    }
+
+    fn pending(&mut self) -> bool {
+        self.child.is_some()
+    }
+
+    fn wait(&self) -> bool {
+        self.mode == Mode::Wait
+    }
+
+    fn origin(&self) -> String {
+        "a second process with the driver's unoptimised kernels (fast start)".into()
+    }
+}
+
+impl Drop for FirstView {
+    fn drop(&mut self) {
+        if let Some((mut child, _)) = self.child.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -436,6 +594,8 @@ mod tests {
         // 40 ticks on 2 cores: 20 busy, 18 idle and 2 waiting: one core's worth idle.
         let b = parse_cpu_line("cpu  115 0 55 1018 12 0 0 0 0 0").unwrap();
         assert_eq!((a.idle, a.total), (1010, 1160));
+        // Niced time counts as idle.
+        assert_eq!(parse_cpu_line("cpu  1 7 1 10 2 0 0 0").unwrap().idle, 19);
         assert!((idle_cores(a, b, 2) - 1.0).abs() < 1e-12);
         assert!(parse_cpu_line("cpu0 1 2 3 4").is_none());
     }

@@ -271,13 +271,25 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         .flatten()
         .map(Arc::new);
     // The second process of a fast start says nothing until its result is taken; this one
-    // stops it once its own kernels have compiled.
+    // stops it once its own kernels have compiled. A process that only compiles them for the
+    // driver's cache (after a second process won) stops there.
+    let compile_only = fast_start::compile_only();
+    let compiled: Option<Box<dyn Fn() + Send + Sync>> = if compile_only {
+        let stop = settings.cancel.clone();
+        Some(Box::new(move || {
+            if let Some(s) = &stop {
+                s.store(true, Ordering::SeqCst);
+            }
+        }))
+    } else {
+        race.clone()
+            .map(|r| Box::new(move || r.take_over()) as Box<dyn Fn() + Send + Sync>)
+    };
     let setup_done = announce_compiles(
         &ctx,
         &bar,
         a.quiet || fast_start::staging().is_some(),
-        race.clone()
-            .map(|r| Box::new(move || r.take_over()) as Box<dyn Fn() + Send + Sync>),
+        compiled,
     );
     let started = Instant::now();
     let out = renderer.render(&scene, &settings, &mut |done, _| {
@@ -298,6 +310,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     ctx.set_kernel_listener(None);
     drop(race);
     bar.finish_and_clear();
+    if compile_only {
+        return Ok(());
+    }
     let mut out = out?;
     let mut meta = image_metadata(&out, &settings, &ctx.info().name);
     if let Some(d) = &denoiser {

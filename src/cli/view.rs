@@ -1,12 +1,16 @@
 //! `illum view`: the interactive window (src/view/), with render's scene, integrator and
 //! sampling options.
 
+use super::fast_start;
 use super::{DeviceArgs, IntegratorArgs, SceneArgs, check_outputs, signal};
+use crate::output::{image_metadata, write_exr};
 use crate::render::RenderSettings;
+use crate::render::Renderer;
 use crate::scene::Scene;
 use crate::view::{Source, ViewOptions};
+use crate::vk::{Context, ContextOptions};
 use anyhow::{Result, bail};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct ViewArgs {
@@ -76,6 +80,11 @@ impl Source for ViewArgs {
 }
 
 pub fn run(a: &ViewArgs) -> Result<()> {
+    let cpu_at_start = fast_start::CpuTimes::now();
+    let mode = fast_start::mode()?;
+    if let Some(dir) = fast_start::staging() {
+        return first_image(a, &dir);
+    }
     if let Some(p) = &a.screenshot
         && !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"))
     {
@@ -115,6 +124,30 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         exposure: a.exposure,
         denoise: a.denoise,
         cancel: signal::install(),
+        early_image: Some(Box::new(move |ctx: &Context, [w, h]: [u32; 2]| {
+            fast_start::FirstView::start(mode, cpu_at_start, ctx, (w, h))
+                .map(|f| Box::new(f) as Box<dyn crate::view::EarlyImage>)
+        })),
     };
     crate::view::run(&opts, a)
+}
+
+/// The second process of the view's fast start (src/cli/fast_start.rs): the view's first image,
+/// one sample a pixel of its scene and settings, written to `dir` for the view to show while it
+/// compiles its own kernels.
+fn first_image(a: &ViewArgs, dir: &Path) -> Result<()> {
+    let scene = a.load()?;
+    let settings = RenderSettings {
+        spp: 1,
+        ..a.settings(&scene)?
+    };
+    let ctx = Context::new(&ContextOptions {
+        device: a.gpu.device.clone(),
+        validation: a.validate,
+        ..Default::default()
+    })?;
+    let out = Renderer::new(ctx.clone()).render(&scene, &settings, &mut |_, _| {})?;
+    let meta = image_metadata(&out, &settings, &ctx.info().name);
+    write_exr(&fast_start::first_view_image(dir), &out.film, &meta)?;
+    super::check_validation(&ctx)
 }

@@ -54,7 +54,7 @@ pub trait Integrator: Send + Sync + std::fmt::Debug {
 
 /// An integrator's kernels. A prepared scene keeps them between renders; each render configures
 /// and binds them first.
-pub trait IntegratorPasses {
+pub trait IntegratorPasses: Send {
     /// Writes what the kernels own (e.g. a cache's address) into a render's frame constants;
     /// `integrator` is the one that created them, with this render's parameters.
     fn configure(

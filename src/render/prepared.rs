@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::gpu_scene::{GpuScene, SceneUpdate};
 use crate::scene::{Camera, Scene};
 use crate::trace::{BuildStats, TraceMode, TraceStructure};
-use std::cell::RefCell;
+use std::sync::Mutex;
 use std::time::Instant;
 
 pub struct PreparedScene {
@@ -25,7 +25,7 @@ pub struct PreparedScene {
     pub extent: f32,
     /// Kernels of the integrators that rendered it, by name and the settings' feature bits
     /// (Integrator::features): pipelines are created once.
-    kernels: RefCell<Vec<KeptKernels>>,
+    kernels: Mutex<Vec<KeptKernels>>,
 }
 
 /// An integrator's kernels kept by a prepared scene: (name, feature bits, kernels).
@@ -39,7 +39,7 @@ impl PreparedScene {
         name: &str,
         features: u32,
     ) -> Option<Box<dyn IntegratorPasses>> {
-        let mut k = self.kernels.borrow_mut();
+        let mut k = self.kernels.lock().unwrap_or_else(|e| e.into_inner());
         let at = k
             .iter()
             .position(|(n, f, _)| *n == name && *f == features)?;
@@ -52,7 +52,10 @@ impl PreparedScene {
         features: u32,
         kernels: Box<dyn IntegratorPasses>,
     ) {
-        self.kernels.borrow_mut().push((name, features, kernels));
+        self.kernels
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((name, features, kernels));
     }
 
     /// Brings the prepared scene to `scene`, an edit of the one it was prepared from, without
@@ -99,7 +102,7 @@ impl Renderer {
             trace,
             camera: scene.camera.clone(),
             upload_seconds,
-            kernels: RefCell::new(Vec::new()),
+            kernels: Mutex::new(Vec::new()),
         })
     }
 }

@@ -239,12 +239,14 @@ impl View<'_> {
 
     /// After a frame was presented: the first frame's time, an applied edit's latency.
     fn first_shown(&mut self, p: &Progressive) {
-        if self.first_frame.is_none() {
+        if self.first_frame.is_none() || self.early_shown {
             self.ctx.set_kernel_listener(None);
             let t = self.started.elapsed().as_secs_f64();
+            let own = if self.early_shown { "own " } else { "" };
             self.first_frame = Some(t);
+            self.early_shown = false;
             crate::note!(
-                "illum view: first frame {t:.3} s after start ({} spp)",
+                "illum view: {own}first frame {t:.3} s after start ({} spp)",
                 p.done()
             );
         }
@@ -304,7 +306,7 @@ fn save(ctx: &Context, p: &Progressive, path: &Path) -> Result<u32> {
 /// The frame: the image scaled into the area above the status bar, the bar's two lines and the
 /// error curve at its right.
 #[allow(clippy::too_many_arguments)]
-fn compose(
+pub(super) fn compose(
     bytes: &mut [u8],
     extent: [u32; 2],
     image: &[[u8; 3]],

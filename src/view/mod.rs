@@ -6,6 +6,7 @@
 //! bad edit leaves the last good scene rendering with the error in the status bar.
 
 mod display;
+mod early;
 mod frames;
 mod input;
 mod orbit;
@@ -60,6 +61,24 @@ pub struct ViewOptions {
     pub denoise: bool,
     /// Set by a signal: quit as if the window were closed (saving what `save_at_exit` asks).
     pub cancel: Arc<AtomicBool>,
+    /// Starts an image that comes sooner than the view's own first frame, given the view's device
+    /// and the image's size (the command line's fast start); None when there is none.
+    #[allow(clippy::type_complexity)]
+    pub early_image: Option<Box<dyn Fn(&Context, [u32; 2]) -> Option<Box<dyn EarlyImage>>>>,
+}
+
+/// An image of the scene at the view's size that can come before the view's own first frame
+/// while its kernels compile (the command line's fast start: a second process renders one sample
+/// a pixel with the driver's unoptimised kernels). Shown until the view's own frames come.
+pub trait EarlyImage {
+    /// Its linear RGB, once ready (then once only); None until then, or if it never comes.
+    fn poll(&mut self) -> Option<Vec<[f32; 3]>>;
+    /// Whether it can still come.
+    fn pending(&mut self) -> bool;
+    /// Whether the view should wait for it before its own first frame (tests).
+    fn wait(&self) -> bool;
+    /// What made it, for the status bar and the log.
+    fn origin(&self) -> String;
 }
 
 /// Rows of the status bar under the image.
@@ -92,13 +111,28 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         [image[0] * scale, image[1] * scale + bar],
     );
     let window = open_window(&mut event_loop, &mut app)?;
-    let ctx = Context::new(&ContextOptions {
+    let present_ctx = Context::new(&ContextOptions {
         device: opts.device.clone(),
         validation: opts.validation,
         instance_extensions: present::instance_extensions(&window)?,
         device_extensions: vec![ash::khr::swapchain::NAME.to_owned()],
     })?;
-    let mut present = present::Present::new(&ctx, &window)?;
+    let mut early = opts
+        .early_image
+        .as_ref()
+        .and_then(|start| start(&present_ctx, image));
+    // An early image is shown while the view's kernels compile, which on lavapipe holds its
+    // device's one queue: the render then takes a device of its own, and the window keeps this
+    // one.
+    let ctx = match early {
+        Some(_) => Context::new(&ContextOptions {
+            device: opts.device.clone(),
+            validation: opts.validation,
+            ..Default::default()
+        })?,
+        None => present_ctx.clone(),
+    };
+    let mut present = present::Present::new(&present_ctx, &window)?;
     let renderer = Renderer::new(ctx.clone());
     // Until the first frame, a cold driver cache compiles for seconds: say so (once).
     let said = std::sync::atomic::AtomicBool::new(false);
@@ -130,6 +164,7 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         frames: 0,
         started,
         first_frame: None,
+        early_shown: false,
         applied: None,
         watch: opts.watch.as_ref().map(|f| {
             watch::Watch::new(if scene.inputs.is_empty() {
@@ -158,7 +193,17 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
     );
     loop {
         let (next, decided) = {
-            let mut p = renderer.progressive(&prepared, &view.camera, &settings)?;
+            let mut p = match early.take() {
+                Some(e) => view.progressive_showing(
+                    e,
+                    (&renderer, &prepared, &settings),
+                    &mut event_loop,
+                    &mut app,
+                    &window,
+                    &mut present,
+                )?,
+                None => renderer.progressive(&prepared, &view.camera, &settings)?,
+            };
             let next = view.frames_of(&mut p, &mut event_loop, &mut app, &window, &mut present)?;
             (next, p.settings().allocation.clone())
         };
@@ -202,7 +247,10 @@ pub fn run(opts: &ViewOptions, source: &dyn Source) -> Result<()> {
         view.applied = Some((saved, t0, how));
     }
     drop(present);
-    let messages = ctx.validation_messages();
+    let mut messages = ctx.validation_messages();
+    if !Arc::ptr_eq(&ctx.0, &present_ctx.0) {
+        messages.extend(present_ctx.validation_messages());
+    }
     if !messages.is_empty() {
         bail!(
             "{} Vulkan validation message(s) (see above)",
@@ -264,6 +312,8 @@ struct View<'o> {
     frames: u64,
     started: Instant,
     first_frame: Option<f64>,
+    /// Whether an early image (the fast start's) was shown before the view's own first frame.
+    early_shown: bool,
     /// An edit applied, waiting for its first frame: the file's save time, when it was applied
     /// and how.
     applied: Option<(SystemTime, Instant, String)>,
