@@ -250,3 +250,44 @@ fn running(proc_dir: &Path) -> bool {
         .and_then(|s| s.rsplit_once(") ").map(|(_, rest)| !rest.starts_with('Z')))
         .unwrap_or(false)
 }
+
+/// Kernels compiled with LLVM's optimisations are noted in illum's cache folder, so that a later
+/// start does not race for them: the note is keyed by what decides the kernels, so another
+/// output file reads the same key and another scene file does not.
+#[test]
+fn optimised_kernels_are_noted_by_what_decides_them() {
+    let dir = temp_path("fast-start-illum-cache");
+    std::fs::create_dir_all(&dir).unwrap();
+    let notes = dir.join("warm-kernels.txt");
+    let keys = || {
+        std::fs::read_to_string(&notes)
+            .unwrap_or_default()
+            .lines()
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    let env = [
+        ("ILLUM_FAST_START", "0"),
+        ("ILLUM_CACHE_DIR", dir.to_str().unwrap()),
+    ];
+    let render = |out: &str, scene: Option<&Path>| {
+        let o = temp_path(out);
+        let mut args = vec![
+            "render", "--width", "32", "--height", "16", "--spp", "1", "--quiet",
+        ];
+        let s = scene.map(|p| p.to_str().unwrap().to_string());
+        if let Some(s) = &s {
+            args.push(s);
+        }
+        args.extend(["-o", o.to_str().unwrap()]);
+        let (code, err) = run(&args, &env);
+        assert_eq!(code, 0, "{err}");
+    };
+    render("fast-start-note-a.exr", None);
+    assert_eq!(keys().len(), 1, "{:?}", keys());
+    render("fast-start-note-b.exr", None);
+    assert_eq!(keys().len(), 1, "another output, another key: {:?}", keys());
+    let veach = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/veach.json");
+    render("fast-start-note-c.exr", Some(&veach));
+    assert_eq!(keys().len(), 2, "another scene, the same key: {:?}", keys());
+}

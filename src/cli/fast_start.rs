@@ -155,7 +155,8 @@ pub(super) type Outputs = Vec<(PathBuf, PathBuf)>;
 
 impl FastStart {
     /// Starts the second process where `mode` and the machine allow it (`since`: CPU times at
-    /// this process's start, to tell whether a core is idle; `bytes`: what one render takes, see
+    /// this process's start, to tell whether a core is idle; `key`: the kernels', see
+    /// [`warm_key`]; `bytes`: what one render takes, see
     /// [`render_bytes`]); `outputs` gives, for its staging folder, the files it will write there
     /// and where each belongs. `ctx` is this process's
     /// device (only llvmpipe compiles at the first dispatch). `bar` is cleared before the second
@@ -163,12 +164,12 @@ impl FastStart {
     pub(super) fn start(
         mode: Mode,
         since: Option<CpuTimes>,
-        ctx: &crate::vk::Context,
+        (ctx, key): (&crate::vk::Context, &str),
         bytes: u64,
         outputs: impl FnOnce(&Path) -> Outputs,
         bar: &ProgressBar,
     ) -> Option<FastStart> {
-        if !wanted(mode, since, ctx, bytes) {
+        if !wanted(mode, since, ctx, bytes, key) {
             return None;
         }
         let dir = match folder() {
@@ -233,19 +234,119 @@ fn lock(m: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Whether a second process runs: on llvmpipe, where `mode` and the machine allow it, and never
-/// from a second process.
-fn wanted(mode: Mode, since: Option<CpuTimes>, ctx: &crate::vk::Context, bytes: u64) -> bool {
+/// Whether a second process runs: on llvmpipe, where `mode` and the machine allow it (unless
+/// asked for whatever the load, not for kernels `key` says are in Mesa's cache), and never from
+/// a second process.
+fn wanted(
+    mode: Mode,
+    since: Option<CpuTimes>,
+    ctx: &crate::vk::Context,
+    bytes: u64,
+    key: &str,
+) -> bool {
     let llvmpipe = ctx.info().driver_id == ash::vk::DriverId::MESA_LLVMPIPE;
     let allowed = match mode {
         Mode::Off => false,
         Mode::Auto => {
-            idle_core(since)
+            !known_warm(key)
+                && idle_core(since)
                 && crate::film::memory::available_bytes().is_some_and(|a| a / 2 >= bytes)
         }
         Mode::On | Mode::Wait => true,
     };
     llvmpipe && allowed && staging().is_none()
+}
+
+/// Kernels compiled with LLVM's optimisations into Mesa's cache on this machine, by a key of what
+/// decides them (see [`warm_key`]): for them a second process is no gain (the view's warm start
+/// would pay for it). A file of recent keys in illum's cache folder; a key whose kernels Mesa
+/// has since dropped only costs a fast start that does not happen.
+fn warm_file() -> Option<PathBuf> {
+    crate::vk::cache_dir().map(|d| d.join("warm-kernels.txt"))
+}
+
+/// What decides the kernels of this command: the program (its size and time), its arguments
+/// but the outputs and display settings, the scene file's size and time, the device, and where
+/// Mesa keeps its cache.
+pub(super) fn warm_key(ctx: &crate::vk::Context, scene: Option<&Path>) -> String {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let stamp = |p: &Path| {
+        std::fs::metadata(p)
+            .ok()
+            .map(|m| (m.len(), m.modified().ok()))
+    };
+    std::env::current_exe()
+        .ok()
+        .as_deref()
+        .map(stamp)
+        .hash(&mut h);
+    scene.map(stamp).hash(&mut h);
+    const SKIP: [&str; 7] = [
+        "-o",
+        "--output",
+        "--report",
+        "--report-plot",
+        "--screenshot",
+        "--frames",
+        "--scale",
+    ];
+    let mut skip_next = false;
+    for a in std::env::args_os().skip(1) {
+        let s = a.to_string_lossy();
+        if std::mem::take(&mut skip_next) {
+            continue;
+        }
+        if SKIP.contains(&s.as_ref()) {
+            skip_next = true;
+            continue;
+        }
+        if SKIP.iter().any(|k| s.starts_with(&format!("{k}="))) {
+            continue;
+        }
+        s.hash(&mut h);
+    }
+    for k in [
+        "MESA_SHADER_CACHE_DIR",
+        "XDG_CACHE_HOME",
+        "HOME",
+        "GALLIVM_PERF",
+        "LP_NATIVE_VECTOR_WIDTH",
+    ] {
+        std::env::var_os(k).hash(&mut h);
+    }
+    let info = ctx.info();
+    (&info.name, &info.driver).hash(&mut h);
+    format!("{:016x}", h.finish())
+}
+
+/// Whether these kernels are known to be in Mesa's cache.
+fn known_warm(key: &str) -> bool {
+    warm_file()
+        .and_then(|f| std::fs::read_to_string(f).ok())
+        .is_some_and(|t| t.lines().any(|l| l == key))
+}
+
+/// Notes that these kernels are in Mesa's cache (the last 256 keys kept; written through a
+/// rename, failures ignored: it only saves time).
+pub(super) fn mark_warm(key: &str) {
+    let Some(file) = warm_file() else { return };
+    let text = std::fs::read_to_string(&file).unwrap_or_default();
+    if text.lines().any(|l| l == key) {
+        return;
+    }
+    let mut keys: Vec<&str> = text.lines().filter(|l| !l.is_empty()).collect();
+    keys.push(key);
+    let keep = &keys[keys.len().saturating_sub(256)..];
+    let tmp = file.with_extension(format!("tmp-{}", std::process::id()));
+    let written = file
+        .parent()
+        .map_or(Ok(()), std::fs::create_dir_all)
+        .and_then(|()| std::fs::write(&tmp, keep.join("\n") + "\n"))
+        .and_then(|()| std::fs::rename(&tmp, &file));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
 }
 
 /// Creates the staging folder of this process's second process: a new one, private (0700),
@@ -478,6 +579,7 @@ pub(super) struct FirstView {
     dir: PathBuf,
     mode: Mode,
     size: (u32, u32),
+    key: String,
 }
 
 /// The image the second process of a view writes in its staging folder.
@@ -491,11 +593,11 @@ impl FirstView {
     pub(super) fn start(
         mode: Mode,
         since: Option<CpuTimes>,
-        ctx: &crate::vk::Context,
+        (ctx, key): (&crate::vk::Context, String),
         (width, height): (u32, u32),
     ) -> Option<FirstView> {
         let bytes = render_bytes(u64::from(width) * u64::from(height), false);
-        if !wanted(mode, since, ctx, bytes) {
+        if !wanted(mode, since, ctx, bytes, &key) {
             return None;
         }
         let dir = folder().ok()?;
@@ -505,6 +607,7 @@ impl FirstView {
                 dir,
                 mode,
                 size: (width, height),
+                key,
             }),
             Err(e) => {
                 crate::note!(
@@ -561,6 +664,10 @@ impl crate::view::EarlyImage for FirstView {
 
     fn origin(&self) -> String {
         "a second process with the driver's unoptimised kernels (fast start)".into()
+    }
+
+    fn compiled(&mut self) {
+        mark_warm(&self.key);
     }
 }
 

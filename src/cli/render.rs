@@ -245,6 +245,8 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let bar = progress_bar(a.quiet, spp, a.time);
+    // What decides the kernels, to note once they are in Mesa's cache (no race for them later).
+    let key = fast_start::warm_key(&ctx, a.scene.scene.as_deref());
     // A fixed sample count only: under --time the two processes would render different images.
     let race = (a.time.is_none())
         .then(|| {
@@ -262,7 +264,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             FastStart::start(
                 mode,
                 cpu_at_start,
-                &ctx,
+                (&ctx, &key),
                 fast_start::render_bytes(pixels, settings.evaluate_passes),
                 staged_outputs,
                 &bar,
@@ -274,17 +276,22 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     // stops it once its own kernels have compiled. A process that only compiles them for the
     // driver's cache (after a second process won) stops there.
     let compile_only = fast_start::compile_only();
-    let compiled: Option<Box<dyn Fn() + Send + Sync>> = if compile_only {
-        let stop = settings.cancel.clone();
-        Some(Box::new(move || {
-            if let Some(s) = &stop {
-                s.store(true, Ordering::SeqCst);
-            }
-        }))
-    } else {
-        race.clone()
-            .map(|r| Box::new(move || r.take_over()) as Box<dyn Fn() + Send + Sync>)
-    };
+    let optimised = fast_start::staging().is_none();
+    let (stop, racing) = (
+        settings.cancel.clone().filter(|_| compile_only),
+        race.clone(),
+    );
+    let compiled: Option<Box<dyn Fn() + Send + Sync>> = Some(Box::new(move || {
+        if let Some(r) = &racing {
+            r.take_over();
+        }
+        if optimised {
+            fast_start::mark_warm(&key);
+        }
+        if let Some(s) = &stop {
+            s.store(true, Ordering::SeqCst);
+        }
+    }));
     let setup_done = announce_compiles(
         &ctx,
         &bar,

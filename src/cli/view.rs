@@ -111,6 +111,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         &outputs,
         &super::named([("scene", a.scene.scene.as_deref())]),
     )?;
+    let scene_file = a.scene.scene.clone();
     let opts = ViewOptions {
         title: format!("illum view: {}", a.scene.name()),
         watch: a.scene.scene.clone(),
@@ -125,7 +126,8 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         denoise: a.denoise,
         cancel: signal::install(),
         early_image: Some(Box::new(move |ctx: &Context, [w, h]: [u32; 2]| {
-            fast_start::FirstView::start(mode, cpu_at_start, ctx, (w, h))
+            let key = fast_start::warm_key(ctx, scene_file.as_deref());
+            fast_start::FirstView::start(mode, cpu_at_start, (ctx, key), (w, h))
                 .map(|f| Box::new(f) as Box<dyn crate::view::EarlyImage>)
         })),
     };

@@ -37,9 +37,11 @@ impl View<'_> {
                     self.show_early(&values, &early.origin(), window, present)?;
                 }
             }
-            Ok(compile
+            let p = compile
                 .join()
-                .map_err(|_| anyhow!("the thread compiling the view's kernels panicked"))??)
+                .map_err(|_| anyhow!("the thread compiling the view's kernels panicked"))??;
+            early.compiled();
+            Ok(p)
         })
     }
 

@@ -79,6 +79,8 @@ pub trait EarlyImage {
     fn wait(&self) -> bool;
     /// What made it, for the status bar and the log.
     fn origin(&self) -> String;
+    /// The view's own kernels have compiled.
+    fn compiled(&mut self);
 }
 
 /// Rows of the status bar under the image.

@@ -8,6 +8,7 @@ mod error;
 mod memory;
 mod pipeline;
 mod pipeline_cache;
+pub use pipeline_cache::cache_dir;
 mod requirements;
 mod timer;
 

@@ -15,14 +15,7 @@ pub(crate) fn path(props: &vk::PhysicalDeviceProperties) -> Option<PathBuf> {
     if std::env::var("ILLUM_PIPELINE_CACHE").is_ok_and(|v| v == "0") {
         return None;
     }
-    let env = |k| {
-        std::env::var_os(k)
-            .filter(|v| !v.is_empty())
-            .map(PathBuf::from)
-    };
-    let dir = env("ILLUM_CACHE_DIR")
-        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("illum")))
-        .or_else(|| env("HOME").map(|h| h.join(".cache").join("illum")))?;
+    let dir = cache_dir()?;
     let uuid: String = props
         .pipeline_cache_uuid
         .iter()
@@ -32,6 +25,19 @@ pub(crate) fn path(props: &vk::PhysicalDeviceProperties) -> Option<PathBuf> {
         "pipelines-{:04x}-{:04x}-{:x}-{uuid}.bin",
         props.vendor_id, props.device_id, props.driver_version
     )))
+}
+
+/// illum's cache folder: `$ILLUM_CACHE_DIR`, else `$XDG_CACHE_HOME/illum`, else
+/// `~/.cache/illum`.
+pub fn cache_dir() -> Option<PathBuf> {
+    let env = |k| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    env("ILLUM_CACHE_DIR")
+        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("illum")))
+        .or_else(|| env("HOME").map(|h| h.join(".cache").join("illum")))
 }
 
 /// The file's data if its header (VkPipelineCacheHeaderVersionOne) is this device's.
