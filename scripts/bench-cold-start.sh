@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Process start to exit of `illum render` on an empty Mesa shader cache, with the fast start
-# (src/cli/fast_start.rs) off and on, interleaved, and whose image each run wrote
+# (src/cli/fast_start/) off and on, interleaved, and whose image each run wrote
 # (docs/performance-kernels.md, "Fast start").
 #
 #   scripts/bench-cold-start.sh [RUNS] [RENDER ARGS...]

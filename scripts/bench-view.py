@@ -38,7 +38,7 @@ def timed(cmd, env):
 
 
 def background_compiles():
-    """Processes compiling optimised kernels after a fast start (src/cli/fast_start.rs)."""
+    """Processes compiling optimised kernels after a fast start (src/cli/fast_start/)."""
     found = []
     for pid in filter(str.isdigit, os.listdir("/proc")):
         try:

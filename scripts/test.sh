@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
-# No second process racing each render (src/cli/fast_start.rs): tests/fast_start.rs turns it on
+# No second process racing each render (src/cli/fast_start/): tests/fast_start.rs turns it on
 # where it tests it; elsewhere it would only add load and make exit paths depend on the clock.
 export ILLUM_FAST_START=0
 # Each stage prints the seconds since the start, so a slow CI run shows where its time went.

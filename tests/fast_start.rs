@@ -1,4 +1,4 @@
-//! Fast start (src/cli/fast_start.rs): on lavapipe a second process renders the image with the
+//! Fast start (src/cli/fast_start/): on lavapipe a second process renders the image with the
 //! driver's unoptimised kernels while the first compiles the optimised ones. Its premise is that
 //! both give the same pixels; these tests check it on kernels of different features, then check
 //! the second process's result taking the outputs' places, and a race left to the clock.

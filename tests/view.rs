@@ -294,7 +294,7 @@ fn the_view_saves_and_shows_what_render_writes() {
     assert_shows(&shot, &png, "the converged frame");
 }
 
-/// The fast start (src/cli/fast_start.rs), made to wait for its second process: the first frame
+/// The fast start (src/cli/fast_start/), made to wait for its second process: the first frame
 /// is that process's one-sample image, shown before the view's own first frame; the view then
 /// converges to what render writes, as without it.
 #[test]

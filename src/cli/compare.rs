@@ -1,7 +1,7 @@
 //! `illum compare`: several integrators or direct-lighting techniques rendered for the same time,
 //! with their error table, error-against-time curves and an image strip with error heat-maps.
 
-use super::render::{announce_compiles, progress_bar};
+use super::progress::{announce_compiles, progress_bar};
 use super::{DeviceArgs, IntegratorArgs, Interrupted, SceneArgs, check_outputs, signal};
 use crate::compare::{Budget, Comparison, Run, Samples, Spec, parse_samples};
 use crate::integrators::Technique;

@@ -9,6 +9,7 @@ pub mod devices;
 mod fast_start;
 pub mod merge;
 pub mod part;
+mod progress;
 pub mod render;
 pub mod schema;
 mod signal;

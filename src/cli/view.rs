@@ -134,7 +134,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     crate::view::run(&opts, a)
 }
 
-/// The second process of the view's fast start (src/cli/fast_start.rs): the view's first image,
+/// The second process of the view's fast start (src/cli/fast_start/): the view's first image,
 /// one sample a pixel of its scene and settings, written to `dir` for the view to show while it
 /// compiles its own kernels.
 fn first_image(a: &ViewArgs, dir: &Path) -> Result<()> {

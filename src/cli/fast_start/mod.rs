@@ -18,6 +18,13 @@
 //! niced time, from /proc/stat) and memory holds two renders; `0` off; `1` on whatever the load; `wait` on, and this process always lets the
 //! second one finish (a test's way to take the second process's path every time).
 
+mod view;
+mod warm;
+
+pub(super) use view::{FirstView, first_view_image};
+use warm::known_warm;
+pub(super) use warm::{mark_warm, warm_key};
+
 use anyhow::{Result, bail};
 use indicatif::ProgressBar;
 use std::io::{Read, Write};
@@ -257,98 +264,6 @@ fn wanted(
     llvmpipe && allowed && staging().is_none()
 }
 
-/// Kernels compiled with LLVM's optimisations into Mesa's cache on this machine, by a key of what
-/// decides them (see [`warm_key`]): for them a second process is no gain (the view's warm start
-/// would pay for it). A file of recent keys in illum's cache folder; a key whose kernels Mesa
-/// has since dropped only costs a fast start that does not happen.
-fn warm_file() -> Option<PathBuf> {
-    crate::vk::cache_dir().map(|d| d.join("warm-kernels.txt"))
-}
-
-/// What decides the kernels of this command: the program (its size and time), its arguments
-/// but the outputs and display settings, the scene file's size and time, the device, and where
-/// Mesa keeps its cache.
-pub(super) fn warm_key(ctx: &crate::vk::Context, scene: Option<&Path>) -> String {
-    use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    let stamp = |p: &Path| {
-        std::fs::metadata(p)
-            .ok()
-            .map(|m| (m.len(), m.modified().ok()))
-    };
-    std::env::current_exe()
-        .ok()
-        .as_deref()
-        .map(stamp)
-        .hash(&mut h);
-    scene.map(stamp).hash(&mut h);
-    const SKIP: [&str; 7] = [
-        "-o",
-        "--output",
-        "--report",
-        "--report-plot",
-        "--screenshot",
-        "--frames",
-        "--scale",
-    ];
-    let mut skip_next = false;
-    for a in std::env::args_os().skip(1) {
-        let s = a.to_string_lossy();
-        if std::mem::take(&mut skip_next) {
-            continue;
-        }
-        if SKIP.contains(&s.as_ref()) {
-            skip_next = true;
-            continue;
-        }
-        if SKIP.iter().any(|k| s.starts_with(&format!("{k}="))) {
-            continue;
-        }
-        s.hash(&mut h);
-    }
-    for k in [
-        "MESA_SHADER_CACHE_DIR",
-        "XDG_CACHE_HOME",
-        "HOME",
-        "GALLIVM_PERF",
-        "LP_NATIVE_VECTOR_WIDTH",
-    ] {
-        std::env::var_os(k).hash(&mut h);
-    }
-    let info = ctx.info();
-    (&info.name, &info.driver).hash(&mut h);
-    format!("{:016x}", h.finish())
-}
-
-/// Whether these kernels are known to be in Mesa's cache.
-fn known_warm(key: &str) -> bool {
-    warm_file()
-        .and_then(|f| std::fs::read_to_string(f).ok())
-        .is_some_and(|t| t.lines().any(|l| l == key))
-}
-
-/// Notes that these kernels are in Mesa's cache (the last 256 keys kept; written through a
-/// rename, failures ignored: it only saves time).
-pub(super) fn mark_warm(key: &str) {
-    let Some(file) = warm_file() else { return };
-    let text = std::fs::read_to_string(&file).unwrap_or_default();
-    if text.lines().any(|l| l == key) {
-        return;
-    }
-    let mut keys: Vec<&str> = text.lines().filter(|l| !l.is_empty()).collect();
-    keys.push(key);
-    let keep = &keys[keys.len().saturating_sub(256)..];
-    let tmp = file.with_extension(format!("tmp-{}", std::process::id()));
-    let written = file
-        .parent()
-        .map_or(Ok(()), std::fs::create_dir_all)
-        .and_then(|()| std::fs::write(&tmp, keep.join("\n") + "\n"))
-        .and_then(|()| std::fs::rename(&tmp, &file));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-}
-
 /// Creates the staging folder of this process's second process: a new one, private (0700),
 /// never a name that exists already (one made by another user could lead elsewhere).
 fn folder() -> std::io::Result<PathBuf> {
@@ -569,116 +484,6 @@ fn spawn(dir: &Path) -> std::io::Result<(Child, Capture, Capture)> {
             .map(|s| Box::new(s) as Box<dyn Read + Send>),
     );
     Ok((child, out, err))
-}
-
-/// The view's fast start: a second process (this program with the same `view` arguments) renders
-/// the view's first image, one sample a pixel, with unoptimised kernels, to show while the view
-/// compiles its own (src/view/early.rs).
-pub(super) struct FirstView {
-    child: Option<(Child, Capture)>,
-    dir: PathBuf,
-    mode: Mode,
-    size: (u32, u32),
-    key: String,
-}
-
-/// The image the second process of a view writes in its staging folder.
-pub(super) fn first_view_image(dir: &Path) -> PathBuf {
-    dir.join("first.exr")
-}
-
-impl FirstView {
-    /// Starts the second process where `mode` and the machine allow it (as [`FastStart::start`])
-    /// for an image of `width` x `height`.
-    pub(super) fn start(
-        mode: Mode,
-        since: Option<CpuTimes>,
-        (ctx, key): (&crate::vk::Context, String),
-        (width, height): (u32, u32),
-    ) -> Option<FirstView> {
-        let bytes = render_bytes(u64::from(width) * u64::from(height), false);
-        if !wanted(mode, since, ctx, bytes, &key) {
-            return None;
-        }
-        let dir = folder().ok()?;
-        match spawn(&dir) {
-            Ok((child, _, err)) => Some(FirstView {
-                child: Some((child, err)),
-                dir,
-                mode,
-                size: (width, height),
-                key,
-            }),
-            Err(e) => {
-                crate::note!(
-                    "illum view: note: no fast start (the second process did not start: {e})"
-                );
-                let _ = std::fs::remove_dir_all(&dir);
-                None
-            }
-        }
-    }
-}
-
-impl crate::view::EarlyImage for FirstView {
-    fn poll(&mut self) -> Option<Vec<[f32; 3]>> {
-        let (child, _) = self.child.as_mut()?;
-        let status = match child.try_wait() {
-            Ok(None) => return None,
-            Ok(Some(s)) => s,
-            Err(_) => {
-                let _ = child.kill();
-                let _ = child.wait();
-                self.child = None;
-                return None;
-            }
-        };
-        let (_, err) = self.child.take()?;
-        let image = first_view_image(&self.dir);
-        let read = if status.success() {
-            crate::output::read_reference(&image, self.size.0, self.size.1)
-                .map_err(|e| e.to_string())
-        } else {
-            let text = String::from_utf8_lossy(&err.join().unwrap_or_default()).into_owned();
-            Err(format!(
-                "{status}: {}",
-                text.lines()
-                    .rev()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("")
-            ))
-        };
-        read.map_err(|e| {
-            crate::note!("illum view: note: the fast start's second process failed ({e})")
-        })
-        .ok()
-    }
-
-    fn pending(&mut self) -> bool {
-        self.child.is_some()
-    }
-
-    fn wait(&self) -> bool {
-        self.mode == Mode::Wait
-    }
-
-    fn origin(&self) -> String {
-        "a second process with the driver's unoptimised kernels (fast start)".into()
-    }
-
-    fn compiled(&mut self) {
-        mark_warm(&self.key);
-    }
-}
-
-impl Drop for FirstView {
-    fn drop(&mut self) {
-        if let Some((mut child, _)) = self.child.take() {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
 }
 
 #[cfg(test)]
