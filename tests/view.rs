@@ -305,6 +305,8 @@ fn a_fast_start_shows_the_second_process_image_first() {
     let (s, o) = (scene.to_str().unwrap(), saved.to_str().unwrap());
     let args = [
         s,
+        "--device",
+        "llvmpipe",
         "--spp",
         "8",
         "--scale",

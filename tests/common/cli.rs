@@ -1,9 +1,11 @@
 //! The illum binary and the files the CLI tests write.
 
-/// The illum binary, with validation on.
+/// The illum binary, with validation on and no fast start (src/cli/fast_start/: a second
+/// process racing each render; tests/fast_start.rs turns it on where it tests it).
 pub fn illum_command() -> std::process::Command {
     let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_illum"));
     c.env("ILLUM_VALIDATION", "1");
+    c.env("ILLUM_FAST_START", "0");
     c
 }
 

@@ -6,9 +6,9 @@
 //! core the compile leaves idle, and writes its outputs to a staging folder. Whichever is done
 //! first gives the result: the second process for a short render (its outputs are moved into
 //! place and its messages printed), this one otherwise (it stops the second as soon as its own
-//! kernels have compiled). The pixels are the same either way: without fast-math flags LLVM's
-//! optimisations keep every floating-point result (tests/fast_start.rs renders both ways and
-//! compares them bit for bit). docs/performance-kernels.md, "Fast start", has the figures.
+//! kernels have compiled). The pixels are the same either way: llvmpipe sets no fast-math flags,
+//! so LLVM's optimisations should keep every floating-point result; tests/fast_start.rs renders
+//! four kernels both ways and compares them bit for bit on the machine it runs on. docs/performance-kernels.md, "Fast start", has the figures.
 //!
 //! When the second process won, the optimised kernels are compiled into Mesa's cache by a third
 //! process left in the background, so that the next render starts warm.
@@ -202,8 +202,8 @@ impl FastStart {
     }
 
     /// This process's kernels have compiled: stop the second process, unless it already won (then
-    /// this never returns: its result is being written and the process ends). With
-    /// `ILLUM_FAST_START=wait`, let it finish first.
+    /// this returns only if its outputs could not be put in place: otherwise its result is
+    /// written and the process ends). With `ILLUM_FAST_START=wait`, let it finish first.
     pub(super) fn take_over(&self) {
         self.settle(self.mode == Mode::Wait);
     }
@@ -241,6 +241,25 @@ fn lock(m: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// Removes staging folders of processes that are gone (killed before they could).
+fn remove_stale_folders() {
+    let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let pid = name
+            .strip_prefix("illum-fast-start-")
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|p| p.parse::<u32>().ok());
+        if let Some(pid) = pid
+            && !Path::new(&format!("/proc/{pid}")).exists()
+        {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
+}
+
 /// Whether a second process runs: on llvmpipe, where `mode` and the machine allow it (unless
 /// asked for whatever the load, not for kernels `key` says are in Mesa's cache), and never from
 /// a second process.
@@ -268,6 +287,7 @@ fn wanted(
 /// never a name that exists already (one made by another user could lead elsewhere).
 fn folder() -> std::io::Result<PathBuf> {
     use std::os::unix::fs::DirBuilderExt;
+    remove_stale_folders();
     let nanos = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.subsec_nanos());
@@ -294,6 +314,13 @@ fn watch(
         let State::Running(child) = &mut *s else {
             return; // this process took over
         };
+        if super::signal::received().is_some() {
+            // Interrupted: this process writes what it has; the second one stops now.
+            let _ = child.kill();
+            let _ = child.wait();
+            *s = State::Over;
+            return;
+        }
         match child.try_wait() {
             Ok(None) => continue,
             // After a Ctrl-C or SIGTERM this process writes what it has and says so in its
@@ -386,9 +413,11 @@ pub(super) fn compile_only() -> bool {
 /// where Mesa's cache is off.
 fn compile_in_background() {
     use std::os::unix::process::CommandExt;
-    let off = |k| std::env::var(k).is_ok_and(|v| matches!(v.as_str(), "1" | "true" | "yes"));
-    if off("MESA_SHADER_CACHE_DISABLE") || off("MESA_DISK_CACHE_DISABLE") {
+    if mesa_cache_off() {
         return;
+    }
+    if background_compile_running() {
+        return; // one at a time: a loop of short renders must not pile them up
     }
     let Ok(exe) = std::env::current_exe() else {
         return;
@@ -411,18 +440,35 @@ fn compile_in_background() {
     let _ = cmd.spawn();
 }
 
-/// Moves a staged output to where it belongs: a rename, or across file systems a copy beside the
-/// destination renamed over it (a reader never sees half a file).
-fn place(from: &Path, to: &Path) -> std::io::Result<()> {
-    if std::fs::rename(from, to).is_ok() {
-        return Ok(());
-    }
-    let tmp = to.with_extension(format!("fast-start-{}", std::process::id()));
-    let copied = std::fs::copy(from, &tmp).and_then(|_| std::fs::rename(&tmp, to));
-    if copied.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    copied.map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", to.display())))
+/// Whether Mesa's disk cache is turned off.
+fn mesa_cache_off() -> bool {
+    let off = |k| std::env::var(k).is_ok_and(|v| matches!(v.as_str(), "1" | "true" | "yes"));
+    off("MESA_SHADER_CACHE_DISABLE") || off("MESA_DISK_CACHE_DISABLE")
+}
+
+/// Whether a background compile of this user's is running (its environment says so).
+fn background_compile_running() -> bool {
+    let marker = format!("{COMPILE_ENV}=1");
+    std::fs::read_dir("/proc").is_ok_and(|entries| {
+        entries.flatten().any(|e| {
+            std::fs::read(e.path().join("environ"))
+                .is_ok_and(|env| env.split(|&b| b == 0).any(|var| var == marker.as_bytes()))
+        })
+    })
+}
+
+/// Puts a staged output where it belongs the way every output is written
+/// (`output::write_atomically`: through a symbolic link, keeping a replaced file's permissions,
+/// synced, a temporary file renamed over it, removed by a second Ctrl-C).
+fn place(from: &Path, to: &Path) -> Result<(), crate::output::OutputError> {
+    crate::output::write_atomically(to, |tmp| {
+        std::fs::copy(from, tmp)
+            .map(|_| ())
+            .map_err(|cause| crate::output::OutputError::Io {
+                path: to.to_path_buf(),
+                cause,
+            })
+    })
 }
 
 type Capture = JoinHandle<Vec<u8>>;

@@ -76,6 +76,9 @@ pub(super) fn known_warm(key: &str) -> bool {
 /// Notes that these kernels are in Mesa's cache (the last 256 keys kept; written through a
 /// rename, failures ignored: it only saves time).
 pub(in crate::cli) fn mark_warm(key: &str) {
+    if super::mesa_cache_off() {
+        return; // nothing stays compiled
+    }
     let Some(file) = warm_file() else { return };
     let text = std::fs::read_to_string(&file).unwrap_or_default();
     if text.lines().any(|l| l == key) {
