@@ -193,49 +193,26 @@ fn a_race_gives_the_same_image_and_time_budgets_take_none() {
     assert_same_pixels(&raced, &plain, "a race against none");
 
     let timed = temp_path("fast-start-timed.exr");
-    let (code, err) = run(
-        &[
-            "render",
-            "--width",
-            "32",
-            "--height",
-            "16",
-            "--time",
-            "0.2",
-            "-o",
-            timed.to_str().unwrap(),
-        ],
-        &[("ILLUM_FAST_START", "wait")],
-    );
-    assert_eq!(code, 0, "{err}");
-    assert!(
-        !err.contains("fast start"),
-        "a time budget took a second process:\n{err}"
-    );
     let csv = temp_path("fast-start-report.csv");
-    let (code, err) = run(
-        &[
-            "render",
-            "--device",
-            "llvmpipe",
-            "--width",
-            "32",
-            "--height",
-            "16",
-            "--spp",
-            "2",
-            "--report",
-            csv.to_str().unwrap(),
-            "-o",
-            timed.to_str().unwrap(),
-        ],
-        &[("ILLUM_FAST_START", "wait")],
-    );
-    assert_eq!(code, 0, "{err}");
-    assert!(
-        !err.contains("fast start"),
-        "a measured render took a second process:\n{err}"
-    );
+    let csv = csv.to_str().unwrap();
+    for (extra, what) in [
+        (&["--time", "0.2"][..], "a time budget"),
+        (&["--spp", "2", "--report", csv][..], "a measured render"),
+    ] {
+        let common = [
+            "render", "--device", "llvmpipe", "--width", "32", "--height", "16",
+        ];
+        let o = ["-o", timed.to_str().unwrap()];
+        let (code, err) = run(
+            &[&common[..], extra, &o].concat(),
+            &[("ILLUM_FAST_START", "wait")],
+        );
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            !err.contains("fast start"),
+            "{what} took a second process:\n{err}"
+        );
+    }
 
     let (code, err) = run(
         &["render", "--spp", "1", "-o", timed.to_str().unwrap()],

@@ -171,6 +171,18 @@ fn saving_view(
     shot: Option<&Path>,
     extra: &[&str],
 ) -> Viewer {
+    saving_view_with(x, scene, saved, shot, extra, &[])
+}
+
+/// `saving_view` with environment variables set.
+fn saving_view_with(
+    x: &Xvfb,
+    scene: &Path,
+    saved: &Path,
+    shot: Option<&Path>,
+    extra: &[&str],
+    env: &[(&str, &str)],
+) -> Viewer {
     let (scene, saved) = (scene.to_str().unwrap(), saved.to_str().unwrap());
     let mut args = vec![
         scene,
@@ -186,7 +198,7 @@ fn saving_view(
         args.extend(["--screenshot", shot.to_str().unwrap()]);
     }
     args.extend(extra);
-    Viewer::start(x, &args)
+    Viewer::start_with(x, &args, env)
 }
 
 /// The beauty's red channel.
@@ -302,22 +314,14 @@ fn a_fast_start_shows_the_second_process_image_first() {
     let x = Xvfb::start();
     let scene = scene_file("fast-start.json", SCENE);
     let saved = temp_path("fast-start-view.exr");
-    let (s, o) = (scene.to_str().unwrap(), saved.to_str().unwrap());
-    let args = [
-        s,
-        "--device",
-        "llvmpipe",
-        "--spp",
-        "8",
-        "--scale",
-        "1",
-        "--save-at-exit",
-        "-o",
-        o,
-        "--frames",
-        "30",
-    ];
-    let mut v = Viewer::start_with(&x, &args, &[("ILLUM_FAST_START", "wait")]);
+    let mut v = saving_view_with(
+        &x,
+        &scene,
+        &saved,
+        None,
+        &["--device", "llvmpipe", "--frames", "30"],
+        &[("ILLUM_FAST_START", "wait")],
+    );
     let first = v.wait_for("first frame");
     assert!(first.contains("from a second process"), "{first}");
     v.wait_for("own first frame");

@@ -132,18 +132,11 @@ impl RenderArgs {
         }
     }
 
-    /// These arguments with every output in `dir` (the second process of a fast start).
+    /// These arguments with the image in `dir` (the second process of a fast start, which
+    /// races only renders without a report or plot).
     fn staged(&self, dir: &Path) -> RenderArgs {
         let mut a = self.clone();
-        a.output = fast_start::staged(dir, "image", &self.output);
-        a.report = self
-            .report
-            .as_deref()
-            .map(|p| fast_start::staged(dir, "report", p));
-        a.report_plot = self
-            .report_plot
-            .as_deref()
-            .map(|p| fast_start::staged(dir, "plot", p));
+        a.output = fast_start::staged(dir, &self.output);
         a
     }
 
@@ -171,7 +164,8 @@ fn parse_crop(s: &str) -> std::result::Result<Window, String> {
 pub fn run(a: &RenderArgs) -> Result<()> {
     let cpu_at_start = fast_start::CpuTimes::now();
     let mode = fast_start::mode()?;
-    // The second process of a fast start writes its outputs to the staging folder.
+    // The second process of a fast start writes its image to the staging folder.
+    let second = fast_start::staging().is_some();
     let staged;
     let asked = a;
     let a = match fast_start::staging() {
@@ -252,15 +246,14 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     // time would be the unoptimised kernels'.
     let race = (a.time.is_none() && !settings.evaluate_passes)
         .then(|| {
+            // Where the second process writes the EXR and PNG (`staged` keeps the file names,
+            // so the image paths of its output are these).
             let staged_outputs = |dir: &Path| {
-                let staged = a.staged(dir);
-                let (sexr, spng) = super::image_paths(&staged.output, a.png)
-                    .expect("the same extension as the output checked above");
-                let mut outputs = vec![(sexr, exr_path.clone())];
-                outputs.extend(spng.zip(png_path.clone()));
-                outputs.extend(staged.report.clone().zip(a.report.clone()));
-                outputs.extend(staged.report_plot.clone().zip(a.report_plot.clone()));
-                outputs
+                [Some(&exr_path), png_path.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .map(|p| (fast_start::staged(dir, p), p.clone()))
+                    .collect()
             };
             let pixels = u64::from(w) * u64::from(h);
             FastStart::start(
@@ -285,7 +278,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     // stops it once its own kernels have compiled. A process that only compiles them for the
     // driver's cache (after a second process won) stops there.
     let compile_only = fast_start::compile_only();
-    let optimised = fast_start::staging().is_none();
+    let optimised = !second;
     let (stop, racing) = (
         settings.cancel.clone().filter(|_| compile_only),
         race.clone(),
@@ -301,12 +294,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             s.store(true, Ordering::SeqCst);
         }
     }));
-    let setup_done = announce_compiles(
-        &ctx,
-        &bar,
-        a.quiet || fast_start::staging().is_some(),
-        compiled,
-    );
+    let setup_done = announce_compiles(&ctx, &bar, a.quiet || second, compiled);
     let started = Instant::now();
     let out = renderer.render(&scene, &settings, &mut |done, _| {
         if !setup_done.swap(true, Ordering::SeqCst) {
@@ -335,7 +323,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         d.add_layer(&mut out.film).map_err(anyhow::Error::msg)?;
         meta.extra.push(("illum.denoiser".into(), d.description()));
     }
-    if fast_start::staging().is_some() {
+    if second {
         // The image is the same; its timings are those of the unoptimised kernels.
         meta.extra.push((
             "illum.fastStart".into(),

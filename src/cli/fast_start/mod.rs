@@ -3,20 +3,23 @@
 //! image. With its optimisations off (Mesa's `GALLIVM_PERF=nopt`) LLVM takes 0.9 s and the code runs
 //! about 2.7× slower. So, while this process compiles the optimised kernels, a second process (this
 //! program again, with the same arguments) renders the same image with unoptimised kernels on the
-//! core the compile leaves idle, and writes its outputs to a staging folder. Whichever is done
-//! first gives the result: the second process for a short render (its outputs are moved into
-//! place and its messages printed), this one otherwise (it stops the second as soon as its own
-//! kernels have compiled). The pixels are the same either way: llvmpipe sets no fast-math flags,
-//! so LLVM's optimisations should keep every floating-point result; tests/fast_start.rs renders
-//! four kernels both ways and compares them bit for bit on the machine it runs on. docs/performance-kernels.md, "Fast start", has the figures.
+//! core the compile leaves idle, and writes its image to a staging folder. Whichever is done first
+//! gives the result: the second process for a short render (its image is put in place and its
+//! messages printed), this one otherwise (it stops the second as soon as its own kernels have
+//! compiled). The pixels are the same either way: llvmpipe sets no fast-math flags, so LLVM's
+//! optimisations should keep every floating-point result; tests/fast_start.rs renders four
+//! kernels both ways and compares them bit for bit on the machine it runs on.
+//! docs/performance-kernels.md, "Fast start", has the figures.
 //!
 //! When the second process won, the optimised kernels are compiled into Mesa's cache by a third
 //! process left in the background, so that the next render starts warm.
 //!
-//! `ILLUM_FAST_START`: unset, on when the driver is llvmpipe, the sample count is fixed (no
-//! `--time`), a core has been idle since this process started (half a core's worth of idle or
-//! niced time, from /proc/stat) and memory holds two renders; `0` off; `1` on whatever the load; `wait` on, and this process always lets the
-//! second one finish (a test's way to take the second process's path every time).
+//! `ILLUM_FAST_START`: unset, on when the driver is llvmpipe, the sample count is fixed and no pass
+//! is measured (no `--time`, `--report`, `--report-plot`, `--reference`), a core has been idle
+//! since this process started (half a core's worth of idle or niced time, from /proc/stat),
+//! memory holds two renders and the kernels are not noted as compiled (warm.rs); `0` off; `1` on
+//! whatever the load; `wait` on, and this process waits for the second before it compiles
+//! anything (a test's way to take the second process's path every time).
 
 mod view;
 mod warm;
@@ -71,14 +74,9 @@ pub(super) fn staging() -> Option<PathBuf> {
     std::env::var_os(CHILD_ENV).map(PathBuf::from)
 }
 
-/// Where the second process writes the output `p` of kind `kind` ("image", "report", "plot"):
-/// the folder, the kind and the file name, so that outputs of one name in two folders do not meet.
-pub(super) fn staged(dir: &Path, kind: &str, p: &Path) -> PathBuf {
-    let name = p.file_name().map_or_else(
-        || "output".to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    );
-    dir.join(format!("{kind}-{name}"))
+/// Where the second process writes the output `p`: the staging folder, the same file name.
+pub(super) fn staged(dir: &Path, p: &Path) -> PathBuf {
+    dir.join(p.file_name().unwrap_or(std::ffi::OsStr::new("output")))
 }
 
 /// Idle and total CPU time of all cores (/proc/stat's first line, in clock ticks).
@@ -315,7 +313,8 @@ fn watch(
             return; // this process took over
         };
         if super::signal::received().is_some() {
-            // Interrupted: this process writes what it has; the second one stops now.
+            // Interrupted: this process writes what it has and says so in its exit status (the
+            // second process's image would hide the interruption); the second one stops now.
             let _ = child.kill();
             let _ = child.wait();
             *s = State::Over;
@@ -323,15 +322,9 @@ fn watch(
         }
         match child.try_wait() {
             Ok(None) => continue,
-            // After a Ctrl-C or SIGTERM this process writes what it has and says so in its
-            // exit status: the second process's image would hide the interruption.
-            Ok(Some(status)) if status.success() && super::signal::received().is_none() => {
+            Ok(Some(status)) if status.success() => {
                 *s = State::SecondWon;
                 break status;
-            }
-            Ok(Some(_)) if super::signal::received().is_some() => {
-                *s = State::Over;
-                return;
             }
             Ok(Some(status)) => {
                 *s = State::Over;
@@ -559,15 +552,9 @@ mod tests {
     }
 
     #[test]
-    fn staged_outputs_keep_kind_and_name() {
+    fn staged_outputs_keep_their_names() {
         let d = Path::new("/s");
-        assert_eq!(
-            staged(d, "image", Path::new("out/a.png")),
-            Path::new("/s/image-a.png")
-        );
-        assert_eq!(
-            staged(d, "plot", Path::new("b/a.png")),
-            Path::new("/s/plot-a.png")
-        );
+        assert_eq!(staged(d, Path::new("out/a.png")), Path::new("/s/a.png"));
+        assert_eq!(staged(d, Path::new("a.exr")), Path::new("/s/a.exr"));
     }
 }
