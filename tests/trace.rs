@@ -647,3 +647,73 @@ fn the_compute_bvh_takes_degenerate_meshes() {
     );
     assert_no_validation_messages(&ctx);
 }
+
+/// A closed room of analytic shapes around the shapes and lights of `instanced_scene`, no meshes:
+/// traced flat (FEATURE_FLAT_SHAPES).
+fn closed_room_scene() -> Scene {
+    let mut scene = instanced_scene(24, 16);
+    scene.meshes.clear();
+    scene.instances.clear();
+    let wall = |name: &str, center: DVec3, u: DVec3, v: DVec3| AnalyticShape {
+        name: name.into(),
+        geometry: ShapeGeometry::Rect { center, u, v },
+        material: 0,
+        pole: None,
+    };
+    let (x, y, z) = (DVec3::X, DVec3::Y, DVec3::Z);
+    scene.shapes.extend([
+        wall("floor", DVec3::new(0.0, -2.0, 1.0), 12.0 * x, 14.0 * z),
+        wall("ceiling", DVec3::new(0.0, 5.0, 1.0), 12.0 * x, 14.0 * z),
+        wall("left", DVec3::new(-6.0, 1.5, 1.0), 7.0 * y, 14.0 * z),
+        wall("right", DVec3::new(6.0, 1.5, 1.0), 7.0 * y, 14.0 * z),
+        wall("back", DVec3::new(0.0, 1.5, -6.0), 12.0 * x, 7.0 * y),
+        wall("front", DVec3::new(0.0, 1.5, 8.0), 12.0 * x, 7.0 * y),
+    ]);
+    scene
+}
+
+/// The flat test of every shape against the BVH walk of the same scene (its feature bit cleared)
+/// and the f64 reference: the same answers, bit for bit, except rays aimed at edges, where two
+/// shapes at the same distance may be told apart differently.
+#[test]
+fn flat_shapes_agree_with_the_walk_and_the_reference() {
+    let ctx = context();
+    let scene = closed_room_scene();
+    let mut gpu = GpuScene::new(&ctx, &scene, ctx.ray_query()).unwrap();
+    assert_ne!(
+        gpu.features & FEATURE_FLAT_SHAPES,
+        0,
+        "the room is not traced flat"
+    );
+    let bvh = build(&ctx, &gpu, TraceMode::Bvh);
+    let camera = camera_rays(&gpu, 24);
+    let camera_hits = trace_rays(&ctx, &gpu, &bvh, &camera).unwrap();
+    let (rays, grazing) = rays(&gpu, &camera_hits, &camera, &mut Rng::new(5), 3000);
+    let flat = trace_rays(&ctx, &gpu, &bvh, &rays).unwrap();
+    gpu.features &= !FEATURE_FLAT_SHAPES;
+    let walk = trace_rays(&ctx, &gpu, &bvh, &rays).unwrap();
+    let mut differ = 0;
+    for (i, r) in rays.iter().enumerate() {
+        if let Some(why) = reference::judge(&gpu, r, &flat[i]) {
+            panic!("ray {i} {r:?}: flat answer {:?} is wrong: {why}", flat[i]);
+        }
+        let (a, b) = (&flat[i], &walk[i]);
+        let same = a.kind == b.kind
+            && a.prim == b.prim
+            && a.t.to_bits() == b.t.to_bits()
+            && a.occluded == b.occluded;
+        if !same && i < grazing {
+            differ += 1;
+        }
+    }
+    let hits = flat.iter().filter(|h| h.kind == HIT_SHAPE).count();
+    assert!(
+        hits > rays.len() / 4,
+        "too few hits to test anything: {hits}"
+    );
+    assert_eq!(
+        differ, 0,
+        "{differ} of {grazing} rays differ between flat and walked"
+    );
+    assert_no_validation_messages(&ctx);
+}

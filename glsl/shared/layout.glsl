@@ -88,6 +88,10 @@
 // A material lobe of the GGX (Trowbridge-Reitz) distribution: without one the kernels hold the
 // Beckmann lobes' code only.
 #define FEATURE_GGX 16384
+// Analytic shapes only, few of them and large against the scene (a closed room): the trace
+// tests every shape from a copy in the BVH's uniform buffer instead of walking the BVH
+// (trace/bvh.glsl says why; src/gpu_scene/encode.rs decides).
+#define FEATURE_FLAT_SHAPES 32768
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8
@@ -217,6 +221,8 @@
 #define BVH_STACK_SIZE 48
 // BvhInstance.root for an analytic shape.
 #define BVH_SHAPE 0xffffffff
+// Most shapes FEATURE_FLAT_SHAPES tests (BvhFlat's arrays).
+#define BVH_FLAT_MAX 16
 
 // Per-render constants (uniform buffer). Positions are camera-relative: the host subtracts the
 // camera position in double precision, so large world coordinates keep their precision here.
@@ -477,6 +483,13 @@ struct BvhHeader {
     uint64_t instances;   // BvhInstance array: the top level's leaves
     uint root;            // link of the top-level root, NONE for an empty scene
     uint node_count;
+};
+
+// The shapes and their ray masks (MASK_*) in shape order, after BvhHeader in the BVH's uniform
+// buffer: what FEATURE_FLAT_SHAPES tests. Entries past Frame.shape_count are zero.
+struct BvhFlat {
+    GpuShape shapes[16];   // BVH_FLAT_MAX
+    uint masks[16];
 };
 
 // Four children's boxes, quantized to 8 bits per plane on a grid over the node's own box (one

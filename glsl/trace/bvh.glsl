@@ -24,6 +24,7 @@
 #extension GL_EXT_buffer_reference2 : require
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_control_flow_attributes : require
 
 #include "shared/layout.glsl"
 #include "shared/common.glsl"
@@ -31,7 +32,7 @@
 #include "trace/hit.glsl"
 #include "trace/shapes.glsl"
 
-layout(scalar, binding = BINDING_BVH) uniform BvhBlock { BvhHeader bvh; };
+layout(scalar, binding = BINDING_BVH) uniform BvhBlock { BvhHeader bvh; BvhFlat bvh_flat_shapes; };
 // Nodes (BvhNode), triangles (BvhTriangle, 40 bytes) and instances are read as 64-bit words, two
 // fields per load: lavapipe issues one gather, or 8 scalar loads, per word whatever its width, so
 // this halves the loads (1.4-1.5x rays per CPU-second where loads are lane by lane, as in Mesa 22
@@ -280,14 +281,42 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
 #undef BVH_PUSH
 #undef BVH_SPILL
 
+// FEATURE_FLAT_SHAPES: every shape tested, in shape order (of two at exactly the same distance
+// the first wins, where the walk keeps the first it visits). Lavapipe loads from a per-lane address
+// lane by lane (or by gathers), and inside any loop it does so even where every lane reads the
+// same word; a uniform buffer read at a compile-time constant offset is one scalar load, which
+// the unrolled loop gives each shape. In a closed room every ray's walk tests most shapes
+// anyway, so a flat test of all of them costs less than the nodes' gathered words
+// (docs/performance-kernels.md, "Flat shapes").
+bool bvh_flat(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_hit, out Hit h) {
+    h.t = INF; h.kind = HIT_NONE; h.instance = NONE; h.prim = NONE; h.bary = vec2(0.0);
+    bool hit = false;
+    uint n = frame.shape_count;
+    [[unroll]] for (uint i = 0u; i < BVH_FLAT_MAX; ++i) {
+        if (i >= n) break;
+        if ((bvh_flat_shapes.masks[i] & mask) != 0u) {
+            float t = intersect_shape(bvh_flat_shapes.shapes[i], o, d, tmin, tmax);
+            if (t < INF) {
+                hit = true;
+                tmax = t;
+                h.t = t; h.kind = HIT_SHAPE; h.prim = i;
+                if (any_hit) break;
+            }
+        }
+    }
+    return hit;
+}
+
 Hit trace_closest(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     Hit h;
-    bvh_traverse(o, d, tmin, tmax, mask, false, h);
+    if (has_feature(FEATURE_FLAT_SHAPES)) bvh_flat(o, d, tmin, tmax, mask, false, h);
+    else bvh_traverse(o, d, tmin, tmax, mask, false, h);
     return h;
 }
 
 bool trace_occluded(vec3 o, vec3 d, float tmin, float tmax, uint mask) {
     Hit h;
+    if (has_feature(FEATURE_FLAT_SHAPES)) return bvh_flat(o, d, tmin, tmax, mask, true, h);
     return bvh_traverse(o, d, tmin, tmax, mask, true, h);
 }
 

@@ -62,3 +62,45 @@ fn ggx_code_is_a_feature_of_the_materials() {
     assert!(!ggx(&lobe("dbrdf")));
     assert!(!ggx(r#"{"diffuse": [0.5, 0.5, 0.5]}"#));
 }
+
+/// A box from its centre and half extents.
+fn aabb(c: [f32; 3], h: [f32; 3]) -> [f32; 6] {
+    [
+        c[0] - h[0],
+        c[1] - h[1],
+        c[2] - h[2],
+        c[0] + h[0],
+        c[1] + h[1],
+        c[2] + h[2],
+    ]
+}
+
+#[test]
+fn a_closed_room_is_traced_flat_and_spread_small_shapes_are_not() {
+    // The six walls of a 4 x 3 x 5 room and two spheres in it: each wall's box is a large share
+    // of the room's, so a ray's BVH walk would test most of them anyway.
+    let mut room = vec![
+        aabb([0.0, 0.0, 0.0], [2.0, 0.0, 2.5]),
+        aabb([0.0, 3.0, 0.0], [2.0, 0.0, 2.5]),
+        aabb([-2.0, 1.5, 0.0], [0.0, 1.5, 2.5]),
+        aabb([2.0, 1.5, 0.0], [0.0, 1.5, 2.5]),
+        aabb([0.0, 1.5, -2.5], [2.0, 1.5, 0.0]),
+        aabb([0.0, 1.5, 2.5], [2.0, 1.5, 0.0]),
+        aabb([-1.0, 0.5, 0.0], [0.5, 0.5, 0.5]),
+        aabb([1.0, 0.5, -1.0], [0.5, 0.5, 0.5]),
+    ];
+    assert!(flat_shapes(&room));
+    // Eight small spheres spread over a large floor: the walk skips most of them.
+    let mut spread: Vec<[f32; 6]> = (0..8)
+        .map(|i| aabb([3.0 * i as f32, 0.5, 0.0], [0.5, 0.5, 0.5]))
+        .collect();
+    assert!(!flat_shapes(&spread));
+    spread.push(aabb([10.5, 0.0, 0.0], [11.0, 0.0, 11.0]));
+    assert!(!flat_shapes(&spread), "one large floor among small shapes");
+    // More shapes than the flat copy holds, and none.
+    while room.len() <= BVH_FLAT_MAX as usize {
+        room.push(room[0]);
+    }
+    assert!(!flat_shapes(&room));
+    assert!(!flat_shapes(&[]));
+}

@@ -54,6 +54,7 @@ use crate::layout::*;
 use crate::vk::{Buffer, Context};
 use ash::vk;
 use builder::{Aabb, BuildParams};
+use bytemuck::Zeroable;
 use glam::{DMat4, DVec3, DVec4, Vec3A};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -315,9 +316,10 @@ pub fn build(ctx: &Context, scene: &GpuScene) -> Result<BvhScene> {
         root,
         node_count: (blas_nodes + top_capacity) as u32,
     };
-    let header_buffer = ctx.upload(
+    let flat = flat_shapes(scene);
+    let header_buffer = ctx.upload_parts(
         "BVH header",
-        std::slice::from_ref(&header),
+        &[bytemuck::bytes_of(&header), bytemuck::bytes_of(&flat)],
         vk::BufferUsageFlags::UNIFORM_BUFFER,
     )?;
     let node_size = std::mem::size_of::<BvhNode>() as u64;
@@ -442,6 +444,23 @@ fn top_level(
     ))
 }
 
+/// The first BVH_FLAT_MAX shapes and their ray masks, as FEATURE_FLAT_SHAPES reads them after
+/// the header (zero where the scene has fewer; unread past them where it has more).
+fn flat_shapes(scene: &GpuScene) -> BvhFlat {
+    let mut flat = BvhFlat::zeroed();
+    for (i, (s, m)) in scene
+        .shapes
+        .iter()
+        .zip(&scene.shape_masks)
+        .take(BVH_FLAT_MAX as usize)
+        .enumerate()
+    {
+        flat.shapes[i] = *s;
+        flat.masks[i] = *m;
+    }
+    flat
+}
+
 impl BvhScene {
     /// Builds the top level again over moved instances and writes it in place: the bottom
     /// levels (nodes and triangles) stay as they are on the device.
@@ -460,6 +479,7 @@ impl BvhScene {
         ctx.write(&self.instances, 0, &instances)?;
         self.header_data.root = root;
         ctx.write(&self.header, 0, std::slice::from_ref(&self.header_data))?;
+        // The flat copy of the shapes stays: an update cannot move a shape (PreparedScene::update).
         self.stats.max_stack = self.stats.max_stack.max(need);
         ctx.count_builds(0, 1);
         Ok(t.elapsed().as_secs_f64())
