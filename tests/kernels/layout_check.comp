@@ -29,6 +29,7 @@ layout(scalar, binding = 20) buffer B20 { RadiosityRecord radiosity_record_v[]; 
 layout(scalar, binding = 21) buffer B21 { RadiosityPass radiosity_pass_v[]; };
 layout(scalar, binding = 22) buffer B22 { GpuLightTreeNode light_tree_node_v[]; };
 layout(scalar, binding = 23) buffer B23 { FullPass full_pass_v[]; };
+layout(scalar, binding = 24) buffer B24 { BvhFlat bvh_flat_v[]; };
 void main() {
     uint i = gl_GlobalInvocationID.x;
     frame_v[i + 1] = frame_v[i];
@@ -55,4 +56,5 @@ void main() {
     radiosity_record_v[i + 1] = radiosity_record_v[i];
     radiosity_pass_v[i + 1] = radiosity_pass_v[i];
     full_pass_v[i + 1] = full_pass_v[i];
+    bvh_flat_v[i + 1] = bvh_flat_v[i];
 }
