@@ -672,7 +672,7 @@ fn closed_room_scene() -> Scene {
     scene
 }
 
-/// The flat test of every shape against the BVH walk of the same scene (its feature bit cleared)
+/// The flat test of every shape (FEATURE_FLAT_SHAPES) against the BVH walk of the same scene (its feature bit cleared)
 /// and the f64 reference: the same answers, bit for bit, except rays aimed at edges, where two
 /// shapes at the same distance may be told apart differently.
 #[test]
@@ -684,6 +684,18 @@ fn flat_shapes_agree_with_the_walk_and_the_reference() {
         gpu.features & FEATURE_FLAT_SHAPES,
         0,
         "the room is not traced flat"
+    );
+    // Past BVH_FLAT_MAX shapes the BVH is walked.
+    let mut more = scene.clone();
+    while more.shapes.len() + more.lights.len() <= BVH_FLAT_MAX as usize {
+        more.shapes.push(more.shapes[0].clone());
+    }
+    let more = GpuScene::new(&ctx, &more, ctx.ray_query()).unwrap();
+    assert_eq!(
+        more.features & FEATURE_FLAT_SHAPES,
+        0,
+        "{} shapes",
+        more.shapes.len()
     );
     let bvh = build(&ctx, &gpu, TraceMode::Bvh);
     let camera = camera_rays(&gpu, 24);

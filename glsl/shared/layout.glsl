@@ -56,6 +56,9 @@
 
 // Specialization constants.
 #define SPEC_FEATURES 0
+// With FEATURE_FLAT_SHAPES: shape i's kind in bits 2i, 2i + 1 (SHAPE_* + 1; 0 past the last
+// shape), so that the flat loop holds each shape's own test only (trace/bvh.glsl).
+#define SPEC_FLAT_KINDS 1
 
 // Feature bits: what a scene uses. Kernels test them against the FEATURES specialization constant,
 // so code for absent features is folded away at pipeline creation.
@@ -88,9 +91,9 @@
 // A material lobe of the GGX (Trowbridge-Reitz) distribution: without one the kernels hold the
 // Beckmann lobes' code only.
 #define FEATURE_GGX 16384
-// Analytic shapes only, few of them and large against the scene (a closed room): the trace
-// tests every shape from a copy in the BVH's uniform buffer instead of walking the BVH
-// (trace/bvh.glsl says why; src/gpu_scene/encode.rs decides).
+// No mesh and at most BVH_FLAT_MAX analytic shapes (light surfaces included): the trace tests
+// every shape, culled by its box, from a copy in the BVH's uniform buffer instead of walking the
+// BVH (trace/bvh.glsl says why).
 #define FEATURE_FLAT_SHAPES 32768
 
 #define WORKGROUP_X 8
@@ -485,11 +488,13 @@ struct BvhHeader {
     uint node_count;
 };
 
-// The shapes and their ray masks (MASK_*) in shape order, after BvhHeader in the BVH's uniform
-// buffer: what FEATURE_FLAT_SHAPES tests. Entries past Frame.shape_count are zero.
+// The shapes, their ray masks (MASK_*) and boxes in shape order, after BvhHeader in the BVH's
+// uniform buffer: what FEATURE_FLAT_SHAPES tests. Entries past Frame.shape_count are zero.
 struct BvhFlat {
     GpuShape shapes[16];   // BVH_FLAT_MAX
     uint masks[16];
+    vec4 lo[16];           // xyz: the shape's box, padded as the BVH's (GpuScene::shape_boxes)
+    vec4 hi[16];
 };
 
 // Four children's boxes, quantized to 8 bits per plane on a grid over the node's own box (one

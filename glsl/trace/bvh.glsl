@@ -281,21 +281,37 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
 #undef BVH_PUSH
 #undef BVH_SPILL
 
-// FEATURE_FLAT_SHAPES: every shape tested, in shape order (of two at exactly the same distance
-// the first wins, where the walk keeps the first it visits). Lavapipe loads from a per-lane address
-// lane by lane (or by gathers), and inside any loop it does so even where every lane reads the
-// same word; a uniform buffer read at a compile-time constant offset is one scalar load, which
-// the unrolled loop gives each shape. In a closed room every ray's walk tests most shapes
-// anyway, so a flat test of all of them costs less than the nodes' gathered words
-// (docs/performance-kernels.md, "Flat shapes").
+// FEATURE_FLAT_SHAPES: every shape tested, in shape order, where the ray crosses its box (of
+// two shapes at exactly the same distance the first in shape order wins, where the walk keeps the
+// first it visits). Lavapipe loads from a per-lane address lane by lane (or by gathers), and
+// inside any loop it does so even where every lane reads the same word; a uniform buffer read at
+// a compile-time constant offset is one scalar load, which the unrolled loop gives each shape's
+// box and words. With few shapes that costs less than the walk's gathered node and shape words
+// (docs/performance-kernels.md, "Flat shapes"). The boxes are the BVH's, so the flat test culls
+// no hit the walk would find.
+layout(constant_id = SPEC_FLAT_KINDS) const uint FLAT_KINDS = 0u;
+
 bool bvh_flat(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_hit, out Hit h) {
     h.t = INF; h.kind = HIT_NONE; h.instance = NONE; h.prim = NONE; h.bary = vec2(0.0);
     bool hit = false;
-    uint n = frame.shape_count;
+    vec3 inv_d = bvh_ray(o, d).inv_d;
+    const float widen = 1.0 + 4.0 / 16777216.0;
+    // Unrolled, with each shape's kind a constant: the driver compiles each shape's own test
+    // once and nothing past the last shape (a loop of 16 tests of every kind added 1.3-1.5 s to a
+    // cold compile on lavapipe).
     [[unroll]] for (uint i = 0u; i < BVH_FLAT_MAX; ++i) {
-        if (i >= n) break;
-        if ((bvh_flat_shapes.masks[i] & mask) != 0u) {
-            float t = intersect_shape(bvh_flat_shapes.shapes[i], o, d, tmin, tmax);
+        uint kind = (FLAT_KINDS >> (2u * i)) & 3u;
+        if (kind == 0u) break;
+        vec3 t0 = (bvh_flat_shapes.lo[i].xyz - o) * inv_d, t1 = (bvh_flat_shapes.hi[i].xyz - o) * inv_d;
+        vec3 tn = min(t0, t1), tf = max(t0, t1);
+        float near = max(max(tn.x, tn.y), max(tn.z, tmin));
+        float far = min(min(tf.x, tf.y), min(tf.z, tmax)) * widen;
+        if ((bvh_flat_shapes.masks[i] & mask) != 0u && near <= far) {
+            GpuShape s = bvh_flat_shapes.shapes[i];
+            vec2 uv;
+            float t = kind == SHAPE_SPHERE + 1u ? intersect_sphere(s.p0.xyz, s.p0.w, s.p2.xy, o, d, tmin, tmax)
+                    : kind == SHAPE_RECT + 1u ? intersect_rect(s.p0.xyz, s.p1.xyz, s.p2.xyz, o, d, tmin, tmax, uv)
+                    : intersect_disk(s.p0.xyz, s.p1.xyz, s.p0.w, o, d, tmin, tmax);
             if (t < INF) {
                 hit = true;
                 tmax = t;

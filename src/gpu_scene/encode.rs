@@ -27,7 +27,7 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
     let materials = scene.materials.iter().map(material).collect();
     let textures = encode_textures(scene);
     light_mean::set_means(&mut lights, &scene.textures);
-    let aabbs: Vec<[f32; 6]> = shapes.iter().map(shape_aabb).collect();
+    let aabbs = shapes.iter().map(shape_aabb).collect();
     let light_bvh = lights::build(&lights);
     let many_lights = lights.len() > LIGHT_TREE_MIN_LIGHTS as usize;
     let light_tree = if many_lights {
@@ -40,8 +40,14 @@ pub(super) fn encode_scene(scene: &Scene, origin: DVec3, geometry: bool) -> Resu
         | emissive_features
         | feature(!instances.trace.is_empty(), FEATURE_MESHES)
         | feature(!shapes.is_empty(), FEATURE_SHAPES)
+        // No mesh and few shapes: every ray tests every shape, each culled by its box
+        // (trace/bvh.glsl, bvh_flat), which on lavapipe costs less than walking the BVH's nodes
+        // (docs/performance-kernels.md, "Flat shapes").
         | feature(
-            instances.trace.is_empty() && flat_shapes(&aabbs),
+            instances.trace.is_empty()
+                && !shapes.is_empty()
+                && shapes.len() <= BVH_FLAT_MAX as usize
+                && shapes.iter().all(|s| s.kind <= SHAPE_DISK),
             FEATURE_FLAT_SHAPES,
         )
         | feature(!textures.is_empty(), FEATURE_TEXTURES)
@@ -517,39 +523,6 @@ fn lobe(l: &crate::scene::SpecularLobe) -> GpuLobe {
         },
         fresnel,
     }
-}
-
-/// Mean share of a shape's box in the scene's box, by surface area, above which every ray tests
-/// every shape (FEATURE_FLAT_SHAPES) rather than walking the BVH. By the surface area heuristic a
-/// ray through the scene's box meets shape i's box with probability SA(i) / SA(scene): the walk
-/// tests about sum SA(i) / SA(scene) shapes where the flat loop tests n, and on lavapipe a walked
-/// test (gathered node and shape words) costs several flat ones (one scalar load a word).
-/// Measured (docs/performance-kernels.md, "Flat shapes"): closed rooms (0.18-0.24) render
-/// 1.03-1.33x faster flat, open scenes of small shapes (0.04-0.13) 0.92-1.10x.
-const FLAT_MIN_SHARE: f32 = 0.15;
-
-/// Whether the analytic shapes with these boxes are traced flat (FEATURE_FLAT_SHAPES).
-pub(crate) fn flat_shapes(aabbs: &[[f32; 6]]) -> bool {
-    if aabbs.is_empty() || aabbs.len() > BVH_FLAT_MAX as usize {
-        return false;
-    }
-    let area = |b: &[f32; 6]| {
-        let e = [b[3] - b[0], b[4] - b[1], b[5] - b[2]];
-        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
-    };
-    let mut scene = [f32::MAX, f32::MAX, f32::MAX, f32::MIN, f32::MIN, f32::MIN];
-    for b in aabbs {
-        for k in 0..3 {
-            scene[k] = scene[k].min(b[k]);
-            scene[k + 3] = scene[k + 3].max(b[k + 3]);
-        }
-    }
-    let total = area(&scene);
-    if !(total > 0.0 && total.is_finite()) {
-        return false;
-    }
-    let share: f32 = aabbs.iter().map(|b| area(b) / total).sum::<f32>() / aabbs.len() as f32;
-    share >= FLAT_MIN_SHARE
 }
 
 fn shape_aabb(s: &GpuShape) -> [f32; 6] {

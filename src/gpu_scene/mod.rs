@@ -33,6 +33,9 @@ pub struct MeshRange {
 pub struct GpuScene {
     pub frame: Frame,
     pub features: u32,
+    /// With FEATURE_FLAT_SHAPES, the shapes' kinds (SPEC_FLAT_KINDS): the kernels' second
+    /// specialization constant.
+    pub flat_kinds: u32,
     pub meshes: Vec<MeshRange>,
     /// (mesh index, rows of the camera-relative object-to-world matrix) per instance.
     pub instances: Vec<(u32, [[f32; 4]; 3])>,
@@ -145,6 +148,7 @@ impl GpuScene {
         set_camera(&mut frame, &scene.camera, origin);
         Ok(GpuScene {
             frame,
+            flat_kinds: flat_kinds(h.features, &h.shapes),
             features: h.features,
             meshes: h.meshes,
             instances: h.instances,
@@ -163,4 +167,17 @@ impl GpuScene {
             fixed_data,
         })
     }
+}
+
+/// SPEC_FLAT_KINDS of a scene with these features and shapes: shape i's kind + 1 in bits 2i and
+/// 2i + 1 where the scene is traced flat, else 0.
+pub fn flat_kinds(features: u32, shapes: &[GpuShape]) -> u32 {
+    if features & FEATURE_FLAT_SHAPES == 0 {
+        return 0;
+    }
+    shapes
+        .iter()
+        .take(BVH_FLAT_MAX as usize)
+        .enumerate()
+        .fold(0, |k, (i, s)| k | ((s.kind + 1) & 3) << (2 * i))
 }

@@ -43,7 +43,7 @@ impl FilmKernel {
             scene.trace.select(rq, bvh),
             &bindings,
             push_size as u32,
-            &[scene.gpu.features | features],
+            &[scene.gpu.features | features, scene.gpu.flat_kinds],
         )?;
         scene.trace.bind(&pipeline);
         Ok(FilmKernel {

@@ -50,7 +50,7 @@ impl QueryKernel {
             trace.select(shaders::TRACE_QUERY_RQ, shaders::TRACE_QUERY_BVH),
             &bindings,
             std::mem::size_of::<QueryConstants>() as u32,
-            &[scene.features],
+            &[scene.features, scene.flat_kinds],
         )?;
         pipeline.bind_buffer(BINDING_FRAME, vk::DescriptorType::UNIFORM_BUFFER, &frame);
         trace.bind(&pipeline);

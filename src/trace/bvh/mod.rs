@@ -457,6 +457,9 @@ fn flat_shapes(scene: &GpuScene) -> BvhFlat {
     {
         flat.shapes[i] = *s;
         flat.masks[i] = *m;
+        let b = scene.shape_boxes[i];
+        flat.lo[i] = [b[0], b[1], b[2], 0.0];
+        flat.hi[i] = [b[3], b[4], b[5], 0.0];
     }
     flat
 }
