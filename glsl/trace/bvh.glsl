@@ -306,7 +306,9 @@ bool bvh_flat(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_
         vec3 tn = min(t0, t1), tf = max(t0, t1);
         float near = max(max(tn.x, tn.y), max(tn.z, tmin));
         float far = min(min(tf.x, tf.y), min(tf.z, tmax)) * widen;
-        if ((bvh_flat_shapes.masks[i] & mask) != 0u && near <= far) {
+        // An any-hit lane that has its hit tests no more shapes; no `break` for it, which would
+        // keep the driver from unrolling the loop (and its offsets from being constants).
+        if ((bvh_flat_shapes.masks[i] & mask) != 0u && near <= far && !(any_hit && hit)) {
             GpuShape s = bvh_flat_shapes.shapes[i];
             vec2 uv;
             float t = kind == SHAPE_SPHERE + 1u ? intersect_sphere(s.p0.xyz, s.p0.w, s.p2.xy, o, d, tmin, tmax)
@@ -316,7 +318,6 @@ bool bvh_flat(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_
                 hit = true;
                 tmax = t;
                 h.t = t; h.kind = HIT_SHAPE; h.prim = i;
-                if (any_hit) break;
             }
         }
     }
