@@ -444,8 +444,9 @@ fn top_level(
     ))
 }
 
-/// The first BVH_FLAT_MAX shapes and their ray masks, as FEATURE_FLAT_SHAPES reads them after
-/// the header (zero where the scene has fewer; unread past them where it has more).
+/// The first BVH_FLAT_MAX shapes with their ray masks and padded boxes, as FEATURE_FLAT_SHAPES
+/// reads them after the header (zero where the scene has fewer; unread where it has more, which
+/// the feature excludes).
 fn flat_shapes(scene: &GpuScene) -> BvhFlat {
     let mut flat = BvhFlat::zeroed();
     for (i, (s, m)) in scene
