@@ -50,14 +50,22 @@ struct BvhRay {
     vec3 shear;    // Sx, Sy, Sz of the watertight test
 };
 
+// 1 / d for the slab tests, zero components replaced by a tiny value of the same sign.
+vec3 bvh_inv_dir(vec3 d) {
+    const float tiny = 1e-20;
+    return 1.0 / mix(d, mix(vec3(tiny), vec3(-tiny), lessThan(d, vec3(0.0))), lessThan(abs(d), vec3(tiny)));
+}
+
+// Box exits are widened by a few ulp so that rounding never culls a box the ray touches (Ize
+// 2013, "Robust BVH ray traversal"); the host pads the boxes for the rest.
+const float BVH_WIDEN = 1.0 + 4.0 / 16777216.0;
+
 BvhRay bvh_ray(vec3 o, vec3 d) {
     BvhRay r;
     r.o = o;
     r.d = d;
     vec3 ad = abs(d);
-    const float tiny = 1e-20;
-    vec3 ds = mix(d, mix(vec3(tiny), vec3(-tiny), lessThan(d, vec3(0.0))), lessThan(ad, vec3(tiny)));
-    r.inv_d = 1.0 / ds;
+    r.inv_d = bvh_inv_dir(d);
     // The dimension where the ray direction is largest becomes z; x and y keep the winding.
     r.kz = ad.x > ad.y ? (ad.x > ad.z ? 0u : 2u) : (ad.y > ad.z ? 1u : 2u);
     r.kx = r.kz == 2u ? 0u : r.kz + 1u;
@@ -162,9 +170,6 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
     uint link = bvh.root;
     uint instance = NONE;
     bool hit = false;
-    // Box exits are widened by a few ulp so that rounding never culls a box the ray touches
-    // (Ize 2013, "Robust BVH ray traversal"); the host pads the quantized boxes for the rest.
-    const float widen = 1.0 + 4.0 / 16777216.0;
     for (;;) {
         if (link == NONE) {
             float entry;
@@ -206,7 +211,7 @@ bool bvh_traverse(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool 
                             max(bvh_bytes(a.z >= 0.0 ? lz : hz) * a.z + b.z, vec4(tmin)));
             vec4 far = min(min(bvh_bytes(a.x >= 0.0 ? hx : lx) * a.x + b.x, bvh_bytes(a.y >= 0.0 ? hy : ly) * a.y + b.y),
                            bvh_bytes(a.z >= 0.0 ? hz : lz) * a.z + b.z);
-            far = min(far * widen, vec4(tmax));
+            far = min(far * BVH_WIDEN, vec4(tmax));
             uvec4 l = uvec4(bvh_word(node_words, base + 2u), bvh_word(node_words, base + 3u));
             // An unused slot has link NONE (its box, lo 255 > hi 0, can pass the widened test).
             bvec4 hits = bvec4(uvec4(lessThanEqual(near, far)) & uvec4(notEqual(l, uvec4(NONE))));
@@ -294,8 +299,7 @@ layout(constant_id = SPEC_FLAT_KINDS) const uint FLAT_KINDS = 0u;
 bool bvh_flat(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_hit, out Hit h) {
     h.t = INF; h.kind = HIT_NONE; h.instance = NONE; h.prim = NONE; h.bary = vec2(0.0);
     bool hit = false;
-    vec3 inv_d = bvh_ray(o, d).inv_d;
-    const float widen = 1.0 + 4.0 / 16777216.0;
+    vec3 inv_d = bvh_inv_dir(d);
     // Unrolled, with each shape's kind a constant: the driver compiles each shape's own test
     // once and nothing past the last shape (a loop of 16 tests of every kind added 1.3-1.5 s to a
     // cold compile on lavapipe).
@@ -305,15 +309,13 @@ bool bvh_flat(vec3 o, vec3 d, float tmin, float tmax, uint mask, const bool any_
         vec3 t0 = (bvh_flat_shapes.lo[i].xyz - o) * inv_d, t1 = (bvh_flat_shapes.hi[i].xyz - o) * inv_d;
         vec3 tn = min(t0, t1), tf = max(t0, t1);
         float near = max(max(tn.x, tn.y), max(tn.z, tmin));
-        float far = min(min(tf.x, tf.y), min(tf.z, tmax)) * widen;
+        float far = min(min(tf.x, tf.y), min(tf.z, tmax)) * BVH_WIDEN;
         // An any-hit lane that has its hit tests no more shapes; no `break` for it, which would
         // keep the driver from unrolling the loop (and its offsets from being constants).
         if ((bvh_flat_shapes.masks[i] & mask) != 0u && near <= far && !(any_hit && hit)) {
             GpuShape s = bvh_flat_shapes.shapes[i];
-            vec2 uv;
-            float t = kind == SHAPE_SPHERE + 1u ? intersect_sphere(s.p0.xyz, s.p0.w, s.p2.xy, o, d, tmin, tmax)
-                    : kind == SHAPE_RECT + 1u ? intersect_rect(s.p0.xyz, s.p1.xyz, s.p2.xyz, o, d, tmin, tmax, uv)
-                    : intersect_disk(s.p0.xyz, s.p1.xyz, s.p0.w, o, d, tmin, tmax);
+            s.kind = kind - 1u;   // the constant, so that only this kind's test is compiled
+            float t = intersect_shape(s, o, d, tmin, tmax);
             if (t < INF) {
                 hit = true;
                 tmax = t;

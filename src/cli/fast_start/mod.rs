@@ -329,12 +329,7 @@ fn watch(
             Ok(Some(status)) => {
                 *s = State::Over;
                 drop(s);
-                let text = String::from_utf8_lossy(&err.join().unwrap_or_default()).into_owned();
-                let last = text
-                    .lines()
-                    .rev()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("");
+                let last = last_line(err);
                 bar.suspend(|| {
                     crate::note!(
                         "illum: note: the fast-start process (unoptimised kernels) failed \
@@ -465,6 +460,16 @@ fn place(from: &Path, to: &Path) -> Result<(), crate::output::OutputError> {
 }
 
 type Capture = JoinHandle<Vec<u8>>;
+
+/// The last line of a captured output that is not blank (what a failed process said last).
+fn last_line(c: Capture) -> String {
+    let text = String::from_utf8_lossy(&c.join().unwrap_or_default()).into_owned();
+    text.lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("")
+        .to_string()
+}
 
 /// The second process: this program with the same arguments, the staging folder in its
 /// environment, LLVM's optimisations off, the lowest CPU priority, its own process group (a

@@ -1,6 +1,6 @@
 //! The view's fast start (see the parent module and src/view/early.rs).
 
-use super::{Capture, CpuTimes, Mode, folder, mark_warm, render_bytes, spawn, wanted};
+use super::{Capture, CpuTimes, Mode, folder, last_line, mark_warm, render_bytes, spawn, wanted};
 use std::path::{Path, PathBuf};
 use std::process::Child;
 
@@ -72,14 +72,7 @@ impl crate::view::EarlyImage for FirstView {
             crate::output::read_reference(&image, self.size.0, self.size.1)
                 .map_err(|e| e.to_string())
         } else {
-            let text = String::from_utf8_lossy(&err.join().unwrap_or_default()).into_owned();
-            Err(format!(
-                "{status}: {}",
-                text.lines()
-                    .rev()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("")
-            ))
+            Err(format!("{status}: {}", last_line(err)))
         };
         read.map_err(|e| {
             crate::note!("illum view: note: the fast start's second process failed ({e})")
