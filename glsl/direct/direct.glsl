@@ -60,7 +60,7 @@ uint light_count_for(GpuLight l, vec3 p, uint n_max) {
     if (l.kind == LIGHT_DOME && l.texture != NONE) return frame.dome_samples * n_max;
     // The floor (src/render/allocation/) lifts small lights above their share when a pilot
     // measured that it pays: the share alone gives every small light one sample.
-    return clamp(uint(ceil(light_share(l, p) * float(n_max))), clamp(frame.light_floor, 1u, n_max), n_max);
+    return clamp(ceil_uint(light_share(l, p) * float(n_max)), clamp(frame.light_floor, 1u, n_max), n_max);
 }
 
 // Light i as seen from the shading point: flagged LIGHT_FLAG_SELF when p lies on its surface.
@@ -113,7 +113,7 @@ vec2 stratify(vec2 u, uint i, uint n, uint shift, bool rows) {
     if (n <= 1u) return u;
     uvec2 cell = uvec2(i, (i + shift) % n), cells = uvec2(n);
     if (!rows) {
-        uint ny = uint(sqrt(float(n) + 0.5));
+        uint ny = floor_uint(sqrt(float(n) + 0.5));
         while (n % ny != 0u) ny -= 1u;
         cells = uvec2(n / ny, ny);
         cell = uvec2(i % cells.x, i / cells.x);
@@ -259,7 +259,7 @@ void direct_open(DirectPlan plan, Shading sh, inout DirectGroup grp, inout Rng r
     }
     // Otherwise a textured dome's column order (stratify), drawn once per group.
     if (grp.dim == NONE && !grp.cv && grp.count > 1u && grp.g < plan.rounds && stratify_rows(grp.l, plan.dome))
-        grp.shift = min(uint(rng_next(rng) * float(grp.count)), grp.count - 1u);
+        grp.shift = min(floor_uint(rng_next(rng) * float(grp.count)), grp.count - 1u);
 }
 
 // The 2D sample of the group's sample j: for 2^m samples on a camera stream, point j of the

@@ -132,7 +132,7 @@ void shadow_flush_start(inout ShadowGroup g, ShadowCandidate cands[SHADOW_GROUP_
     if (m == 0u) return;
     g.flushing = true;
     g.m = m;
-    g.k = clamp(uint(ceil(frame.shadow_resample * float(m))), 1u, m);
+    g.k = clamp(ceil_uint(frame.shadow_resample * float(m)), 1u, m);
     g.all = g.k >= m;
     g.i = 0u;
     g.taken = 0u;

@@ -60,7 +60,7 @@ LightHit sun_hit(GpuLight l, vec3 w) {
 // of width 1/n in u, src/gpu_scene/dome.rs) bounds the binary search to the few intervals that
 // bucket can reach: it returns the same index as a search over all n, in O(1) expected steps.
 uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n, float u) {
-    uvec2 r = guide.v[gbase + min(uint(u * float(n)), n - 1u)];
+    uvec2 r = guide.v[gbase + min(floor_uint(u * float(n)), n - 1u)];
     uint lo = r.x, hi = r.y;   // invariant: cdf[lo] <= u < cdf[hi] (cdf[n] = 1 > u)
     while (hi - lo > 1u) {
         uint mid = (lo + hi) >> 1u;
@@ -173,8 +173,8 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     float cu = uv.x - dome_cell_offset(l, W);
     if (cu < 0.0) cu += 1.0;
     float x = max(cu, 0.0) * float(W), y = max(uv.y, 0.0) * float(H);
-    uint i = min(uint(x), W - 1u);
-    uint j = min(uint(y), H - 1u);
+    uint i = min(floor_uint(x), W - 1u);
+    uint j = min(floor_uint(y), H - 1u);
     DomeCdfRef marg = DomeCdfRef(ds.marginal);
     DomeCdfRef cond = DomeCdfRef(ds.conditional);
     uint base = j * (W + 1u);

@@ -62,7 +62,7 @@ int wrap_texel(int i, int n, uint mode) {
     int m = mode == TEXTURE_WRAP_MIRROR ? 2 * n : n;
     // i mod m by a float quotient (CPU drivers have no vector integer division), corrected to be
     // exact: the quotient is off by at most one for the indices textures have (|i| < 2^22).
-    int p = i - m * int(floor(float(i) / float(m)));
+    int p = i - m * floor_int(float(i) / float(m));
     if (p < 0) p += m;
     if (p >= m) p -= m;
     return p < n ? p : m - 1 - p;
@@ -78,10 +78,10 @@ vec4 texel_at(GpuTexture t, ivec2 p, uvec2 wrap) {
 // The texture at texel coordinates st (texel (i, j) covers [i, i + 1) x [j, j + 1), its centre at
 // (i + 1/2, j + 1/2)): the texel containing st, or the bilinear blend of the four nearest centres.
 vec4 texture_at(GpuTexture t, vec2 st, bool nearest, uvec2 wrap) {
-    if (nearest) return texel_at(t, ivec2(floor(st)), wrap);
+    if (nearest) return texel_at(t, floor_int(st), wrap);
     vec2 c = st - 0.5;
     vec2 f = c - floor(c);
-    ivec2 i0 = ivec2(floor(c));
+    ivec2 i0 = floor_int(c);
     // Each row and column wrapped once (not once per texel).
     int x0 = wrap_texel(i0.x, int(t.width), wrap.x), x1 = wrap_texel(i0.x + 1, int(t.width), wrap.x);
     uint r0 = t.offset + uint(wrap_texel(i0.y, int(t.height), wrap.y)) * t.width;

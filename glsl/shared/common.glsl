@@ -98,6 +98,20 @@ vec2 rng_next2(inout Rng r) {
     return vec2(a, rng_pcg(r));
 }
 
+// floor(x) as an int: exact for |x| <= 2^22, and within [-2^22, 2^22] for every x (NaN and the
+// infinities too, so an index made from it stays in range). Lavapipe converts a float to an int
+// lane by lane (LLVM 15 does not vectorize its saturating conversion: eight scalar conversions,
+// compares and inserts per vector); an add and a bit cast stay in vector registers
+// (docs/performance-kernels.md, "Float to int").
+int floor_int(float x) {
+    return clamp(floatBitsToInt(floor(x) + 12582912.0) - 0x4B400000, -4194304, 4194304);
+}
+// floor(x) for x >= 0 (NaN reads 2^22), as floor_int.
+uint floor_uint(float x) { return uint(max(floor_int(x), 0)); }
+// ceil(x) for x >= 0, as floor_int.
+uint ceil_uint(float x) { return uint(max(-floor_int(-x), 0)); }
+ivec2 floor_int(vec2 v) { return ivec2(floor_int(v.x), floor_int(v.y)); }
+
 // True for NaN and +-Inf; a bit test, since isnan/isinf may be folded away by the compiler.
 bool non_finite(float x) { return (floatBitsToUint(x) & 0x7fffffffu) >= 0x7f800000u; }
 bool non_finite(vec3 v) { return non_finite(v.x) || non_finite(v.y) || non_finite(v.z); }
