@@ -114,6 +114,20 @@ bool dome_cell(GpuDomeSampling ds, uint i, uint j, out DomeCell c) {
     return true;
 }
 
+// Mitsuba's cell (DOME_SHAPE_CORNERS) as its corners, top (left, right) t and bottom b; false when
+// the density is uniform there. The same nodes as dome_cell's, without its 3 x 3 rows.
+bool dome_corners(GpuDomeSampling ds, uint i, uint j, out vec2 t, out vec2 b) {
+    t = b = vec2(1.0);
+    if (!has_feature(FEATURE_DOME_SHAPED)) return false;
+    DomeCdfRef nodes = DomeCdfRef(ds.nodes);
+    uint s = ds.nodes_width;
+    int x = int(i), y = int(j);
+    if ((floatBitsToUint(nodes.v[(j + 1u) * s + i + 1u]) & 0x80000000u) == 0u) return false;
+    t = vec2(dome_node(nodes, s, x, y), dome_node(nodes, s, x + 1, y));
+    b = vec2(dome_node(nodes, s, x, y + 1), dome_node(nodes, s, x + 1, y + 1));
+    return true;
+}
+
 // Integral over [0, 1] of the piecewise linear function with nodes n at 0, 1/2, 1 (times 4).
 float dome_pl_mass(vec3 n) { return n.x + 2.0 * n.y + n.z; }
 
@@ -167,6 +181,26 @@ float dome_cell_warp(DomeCell c, inout vec2 f) {
     return dome_cell_density(c, m, f);
 }
 
+// One bilinear patch of corners t, b (dome_corners): the density of dome_cell_warp for the same
+// cell (its piecewise linear rows are linear there), drawn by inverting the linear marginal in y,
+// then the line at y, each once instead of by halves; returns the density relative to uniform.
+float dome_patch_warp(vec2 t, vec2 b, inout vec2 f) {
+    float top = t.x + t.y, total = top + b.x + b.y;
+    if (!(total > 0.0)) return 1.0;
+    float y = dome_sample_linear(f.y, top, b.x + b.y);
+    vec2 row = mix(t, b, y);
+    f = vec2(dome_sample_linear(f.x, row.x, row.y), y);
+    return 4.0 * mix(row.x, row.y, f.x) / total;
+}
+
+// The patch's density at f relative to uniform (dome_patch_warp's).
+float dome_patch_density(vec2 t, vec2 b, vec2 f) {
+    float total = t.x + t.y + b.x + b.y;
+    if (!(total > 0.0)) return 1.0;
+    vec2 row = mix(t, b, f.y);
+    return 4.0 * mix(row.x, row.y, f.x) / total;
+}
+
 // The table's density at direction w of map coordinates uv (0 where it gives none).
 float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     uint W = ds.width, H = ds.height;
@@ -182,10 +216,15 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     float pc = cond.v[base + i + 1u] - cond.v[base + i];
     float jacobian = dome_jacobian(l, w);
     if (!(jacobian > 0.0)) return 0.0;
+    vec2 fc = clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0);
+    float shape = 1.0;
     DomeCell c;
-    float shape = dome_cell(ds, i, j, c)
-        ? dome_cell_density(c, dome_cell_marginal(c), clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0))
-        : 1.0;
+    vec2 t, b;
+    if (ds.shape == DOME_SHAPE_CORNERS) {
+        if (dome_corners(ds, i, j, t, b)) shape = dome_patch_density(t, b, fc);
+    } else if (dome_cell(ds, i, j, c)) {
+        shape = dome_cell_density(c, dome_cell_marginal(c), fc);
+    }
     return pm * pc * shape * float(W * H) / jacobian;
 }
 
@@ -245,7 +284,13 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     if (!(pm > 0.0) || !(pc > 0.0)) return s;
     vec2 f = clamp(vec2((uy - c0) / pc, (ux - m0) / pm), 0.0, 1.0);
     DomeCell c;
-    float shape = dome_cell(ds, i, j, c) ? dome_cell_warp(c, f) : 1.0;
+    float shape = 1.0;
+    vec2 t, b;
+    if (ds.shape == DOME_SHAPE_CORNERS) {
+        if (dome_corners(ds, i, j, t, b)) shape = dome_patch_warp(t, b, f);
+    } else if (dome_cell(ds, i, j, c)) {
+        shape = dome_cell_warp(c, f);
+    }
     vec2 uv = vec2((float(i) + f.x) / float(W) + dome_cell_offset(l, W), (float(j) + f.y) / float(H));
     if (uv.x >= 1.0) uv.x -= 1.0;
     float jacobian;
