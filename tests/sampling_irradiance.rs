@@ -462,3 +462,56 @@ fn inverse_trigonometry_is_accurate() {
     assert!(worst.iter().all(|&e| e < 5e-7), "{worst:?}");
     assert_no_validation_messages(&ctx);
 }
+
+/// floor_int, floor_uint and ceil_uint (texel and table indices, sample counts) against f64's
+/// floor and ceil: exact over |x| <= 2^22 (integers, their neighbours a float step away, and
+/// uniform values), and clamped to [-2^22, 2^22] (floor_uint and ceil_uint: [0, 2^22]) for
+/// larger, infinite and NaN inputs, so an index made from them stays in range.
+#[test]
+fn float_to_int_is_exact_in_range_and_clamped_outside() {
+    let ctx = context();
+    let k = Kernel::new(&ctx, "floor_check", illum_test_kernels::FLOOR_CHECK_PLAIN);
+    const LIMIT: f64 = 4_194_304.0; // 2^22
+    let mut input: Vec<f32> = Vec::new();
+    for e in 0..=22 {
+        for s in [-1.0f32, 1.0] {
+            let v = s * (1u32 << e) as f32;
+            input.extend([v, v.next_up(), v.next_down(), v + 0.5, v - 0.5]);
+        }
+    }
+    let n = 1 << 16;
+    input.extend((0..n).map(|i| ((i as f64 + 0.37) / n as f64 * 2.0 * LIMIT - LIMIT) as f32));
+    input.extend((0..n).map(|i| ((i as f64 + 0.5) / n as f64 * 20.0 - 10.0) as f32));
+    input.extend([
+        0.0,
+        -0.0,
+        1e-30,
+        -1e-30,
+        5e6,
+        -5e6,
+        3e9,
+        -3e9,
+        f32::MAX,
+        f32::MIN,
+    ]);
+    input.extend([f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN]);
+    let out: Vec<[u32; 4]> = k.run(&[0u32; 4], &input, 0, input.len(), 0, input.len());
+    for (&x, o) in input.iter().zip(&out) {
+        let (fi, fu, cu) = (o[0] as i32, o[1], o[2]);
+        assert!(
+            (-LIMIT..=LIMIT).contains(&f64::from(fi)),
+            "floor_int({x}) = {fi}"
+        );
+        assert!(
+            f64::from(fu) <= LIMIT && f64::from(cu) <= LIMIT,
+            "{x}: {fu} {cu}"
+        );
+        let xd = f64::from(x);
+        if xd.abs() <= LIMIT {
+            assert_eq!(f64::from(fi), xd.floor(), "floor_int({x})");
+            assert_eq!(f64::from(fu), xd.floor().max(0.0), "floor_uint({x})");
+            assert_eq!(f64::from(cu), xd.ceil().max(0.0), "ceil_uint({x})");
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}
