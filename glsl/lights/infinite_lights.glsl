@@ -75,7 +75,9 @@ uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n,
 // (nodes interpolated from its corners) and the four bilinear quarters of illum's texel. Sampling
 // draws y from the marginal, then x given y, each piecewise linear and inverted in closed form, so
 // (fx, fy) -> (x, y) is monotone in each and the sample sequence's stratification is kept.
-struct DomeCell { vec3 r0, r1, r2; };
+// Mitsuba's cell (DOME_SHAPE_CORNERS, `bilinear`) is one bilinear patch, kept as its corners: top
+// (left, right) t and bottom b, whose rows are linear (dome_patch_warp).
+struct DomeCell { bool bilinear; vec2 t, b; vec3 r0, r1, r2; };
 
 // Nodes are luminances; the sign bit of a cell's first node (texel (i, j)) says whether the cell
 // is shaped at all (src/gpu_scene/dome.rs: where its luminance varies enough to pay for it).
@@ -85,19 +87,16 @@ float dome_node(DomeCdfRef nodes, uint stride, int i, int j) {
 
 // The nodes of cell (i, j); false when the density is uniform there.
 bool dome_cell(GpuDomeSampling ds, uint i, uint j, out DomeCell c) {
-    c = DomeCell(vec3(1.0), vec3(1.0), vec3(1.0));
+    c = DomeCell(ds.shape == DOME_SHAPE_CORNERS, vec2(1.0), vec2(1.0), vec3(1.0), vec3(1.0), vec3(1.0));
     if (!has_feature(FEATURE_DOME_SHAPED) || ds.shape == DOME_SHAPE_UNIFORM) return false;
     DomeCdfRef nodes = DomeCdfRef(ds.nodes);
     uint s = ds.nodes_width;
     int x = int(i), y = int(j);
     if ((floatBitsToUint(nodes.v[(j + 1u) * s + i + 1u]) & 0x80000000u) == 0u) return false;
-    if (ds.shape == DOME_SHAPE_CORNERS) {
+    if (c.bilinear) {
         // Mitsuba: corners are texels (i, j) .. (i + 1, j + 1), the nodes wrapped in u already.
-        vec2 t = vec2(dome_node(nodes, s, x, y), dome_node(nodes, s, x + 1, y));
-        vec2 b = vec2(dome_node(nodes, s, x, y + 1), dome_node(nodes, s, x + 1, y + 1));
-        c.r0 = vec3(t.x, 0.5 * (t.x + t.y), t.y);
-        c.r2 = vec3(b.x, 0.5 * (b.x + b.y), b.y);
-        c.r1 = 0.5 * (c.r0 + c.r2);
+        c.t = vec2(dome_node(nodes, s, x, y), dome_node(nodes, s, x + 1, y));
+        c.b = vec2(dome_node(nodes, s, x, y + 1), dome_node(nodes, s, x + 1, y + 1));
     } else {
         // illum's bilinear lookup over texel (i, j): at its centre the texel, at its edges the
         // means of two texels, at its corners of four.
@@ -111,20 +110,6 @@ bool dome_cell(GpuDomeSampling ds, uint i, uint j, out DomeCell c) {
         c.r1 = rows[1];
         c.r2 = 0.5 * (rows[1] + rows[2]);
     }
-    return true;
-}
-
-// Mitsuba's cell (DOME_SHAPE_CORNERS) as its corners, top (left, right) t and bottom b; false when
-// the density is uniform there. The same nodes as dome_cell's, without its 3 x 3 rows.
-bool dome_corners(GpuDomeSampling ds, uint i, uint j, out vec2 t, out vec2 b) {
-    t = b = vec2(1.0);
-    if (!has_feature(FEATURE_DOME_SHAPED)) return false;
-    DomeCdfRef nodes = DomeCdfRef(ds.nodes);
-    uint s = ds.nodes_width;
-    int x = int(i), y = int(j);
-    if ((floatBitsToUint(nodes.v[(j + 1u) * s + i + 1u]) & 0x80000000u) == 0u) return false;
-    t = vec2(dome_node(nodes, s, x, y), dome_node(nodes, s, x + 1, y));
-    b = vec2(dome_node(nodes, s, x, y + 1), dome_node(nodes, s, x + 1, y + 1));
     return true;
 }
 
@@ -181,9 +166,9 @@ float dome_cell_warp(DomeCell c, inout vec2 f) {
     return dome_cell_density(c, m, f);
 }
 
-// One bilinear patch of corners t, b (dome_corners): the density of dome_cell_warp for the same
-// cell (its piecewise linear rows are linear there), drawn by inverting the linear marginal in y,
-// then the line at y, each once instead of by halves; returns the density relative to uniform.
+// One bilinear patch of corners t, b: its point drawn by inverting the linear marginal in y, then
+// the line at y, each once (its rows as piecewise linear nodes would be linear, the same inverse
+// CDF by halves); returns the density relative to uniform.
 float dome_patch_warp(vec2 t, vec2 b, inout vec2 f) {
     float top = t.x + t.y, total = top + b.x + b.y;
     if (!(total > 0.0)) return 1.0;
@@ -201,6 +186,14 @@ float dome_patch_density(vec2 t, vec2 b, vec2 f) {
     return 4.0 * mix(row.x, row.y, f.x) / total;
 }
 
+// A shaped cell's point and density (dome_cell), and its density at f.
+float dome_shape_warp(DomeCell c, inout vec2 f) {
+    return c.bilinear ? dome_patch_warp(c.t, c.b, f) : dome_cell_warp(c, f);
+}
+float dome_shape_density(DomeCell c, vec2 f) {
+    return c.bilinear ? dome_patch_density(c.t, c.b, f) : dome_cell_density(c, dome_cell_marginal(c), f);
+}
+
 // The table's density at direction w of map coordinates uv (0 where it gives none).
 float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     uint W = ds.width, H = ds.height;
@@ -216,15 +209,10 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     float pc = cond.v[base + i + 1u] - cond.v[base + i];
     float jacobian = dome_jacobian(l, w);
     if (!(jacobian > 0.0)) return 0.0;
-    vec2 fc = clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0);
-    float shape = 1.0;
     DomeCell c;
-    vec2 t, b;
-    if (ds.shape == DOME_SHAPE_CORNERS) {
-        if (dome_corners(ds, i, j, t, b)) shape = dome_patch_density(t, b, fc);
-    } else if (dome_cell(ds, i, j, c)) {
-        shape = dome_cell_density(c, dome_cell_marginal(c), fc);
-    }
+    float shape = dome_cell(ds, i, j, c)
+        ? dome_shape_density(c, clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0))
+        : 1.0;
     return pm * pc * shape * float(W * H) / jacobian;
 }
 
@@ -284,13 +272,7 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     if (!(pm > 0.0) || !(pc > 0.0)) return s;
     vec2 f = clamp(vec2((uy - c0) / pc, (ux - m0) / pm), 0.0, 1.0);
     DomeCell c;
-    float shape = 1.0;
-    vec2 t, b;
-    if (ds.shape == DOME_SHAPE_CORNERS) {
-        if (dome_corners(ds, i, j, t, b)) shape = dome_patch_warp(t, b, f);
-    } else if (dome_cell(ds, i, j, c)) {
-        shape = dome_cell_warp(c, f);
-    }
+    float shape = dome_cell(ds, i, j, c) ? dome_shape_warp(c, f) : 1.0;
     vec2 uv = vec2((float(i) + f.x) / float(W) + dome_cell_offset(l, W), (float(j) + f.y) / float(H));
     if (uv.x >= 1.0) uv.x -= 1.0;
     float jacobian;
