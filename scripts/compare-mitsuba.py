@@ -13,7 +13,10 @@ excluded). Mitsuba renders a sample count calibrated from its previous render of
 take T seconds; its first (warm-up) render, which includes its JIT compilation, is timed apart and
 not counted. Some samplers (multijitter, ldsampler) compile Mitsuba's kernels again for every
 sample count, so each timed render follows an untimed one of the same count. Each relMSE is scaled by (seconds taken / T), i.e. reported at exactly T (relMSE of an
-unbiased estimator falls as 1/time). The table gives medians over rounds, and the variance part
+unbiased estimator falls as 1/time). Samplers that round the count (ldsampler to a power of 4:
+up to 4x the time asked) are rendered at two counts about T, and their relMSE read at T on the
+line through both in log-log (--bracket; without it, the one count scaled by its time, which
+favours a sampler whose error falls faster than 1/time). The table gives medians over rounds, and the variance part
 of relMSE from pairs of rounds (pair_relmse: free of the reference's own noise, which matters where
 the renders come near the reference, as on a GPU).
 
@@ -121,18 +124,57 @@ class Mitsuba:
         return total, time.time() - t
 
     def timed(self, seconds, seed, out):
-        spp = max(1, round(seconds * self.rate / self.pixels))
-        # Kernels may take the sample count as a constant (multijitter's and ldsampler's do): a
-        # new count compiles them again (0.5-0.8 s on 2 cores), which a render of that count
-        # once, untimed, leaves out.
-        self.render(spp, seed + 7919)
-        t = time.time()
-        img, spp = self.render(spp, seed)
-        wall = time.time() - t
-        self.rate = spp * self.pixels / wall
+        # A count sized from a short calibration can take a tenth of `seconds` (scaling its
+        # relMSE to `seconds` would then scale the reference's noise away too): a render outside
+        # [0.8, 1.25] x seconds is done again at the rate it measured, unless the sampler rounded
+        # the count up (bracketed() reads that one at `seconds`).
+        for _ in range(3):
+            ask = max(1, round(seconds * self.rate / self.pixels))
+            # Kernels may take the sample count as a constant (multijitter's and ldsampler's
+            # do): a new count compiles them again (0.5-0.8 s on 2 cores), which a render of
+            # that count once, untimed, leaves out.
+            self.render(ask, seed + 7919)
+            t = time.time()
+            img, spp = self.render(ask, seed)
+            wall = time.time() - t
+            self.rate = spp * self.pixels / wall
+            if 0.8 * seconds <= wall <= 1.25 * seconds or spp > 1.25 * ask:
+                break
         if out:
             mi.Bitmap(np.asarray(img, dtype=np.float32)).write(out)
         return spp, wall
+
+    def bracketed(self, seconds, seed, out):
+        """timed(), and where its count took more than 1.25 seconds (the sampler rounded it up),
+        also the next count below that the sampler renders: [(spp, wall, path)], longest last."""
+        spp, wall = self.timed(seconds, seed, out)
+        runs = [(spp, wall, out)]
+        ask = spp // 2
+        while wall > 1.25 * seconds and ask >= 1:
+            self.render(ask, seed + 7919)
+            t = time.time()
+            img, n = self.render(ask, seed)
+            w = time.time() - t
+            if n < spp:
+                low = out.replace(".exr", "-low.exr")
+                mi.Bitmap(np.asarray(img, dtype=np.float32)).write(low)
+                runs.insert(0, (n, w, low))
+                break
+            ask //= 2
+        return runs
+
+
+def at_time(points, seconds):
+    """The error at `seconds` on the line through [(seconds, error)] in log-log, where the two
+    renders bracket `seconds` and their times differ by 1.5x or more (renders whose time is
+    mostly fixed costs do not: their line would extrapolate wildly); else the render nearest
+    `seconds` in log time, scaled as 1/time."""
+    (t0, e0), (t1, e1) = points[0], points[-1]
+    if t1 >= 1.5 * t0 and t0 <= seconds <= t1:
+        k = (np.log(e1) - np.log(e0)) / (np.log(t1) - np.log(t0))
+        return float(np.exp(np.log(e0) + k * (np.log(seconds) - np.log(t0))))
+    t, e = min(points, key=lambda p: abs(np.log(p[0] / seconds)))
+    return e * t / seconds
 
 
 def illum(binary, scene, seconds, seed, options, out):
@@ -148,6 +190,19 @@ def illum(binary, scene, seconds, seed, options, out):
     return int(m.group(1)), float(m.group(2)), float(m.group(3))
 
 
+def pairs_at_time(xs, ref, seconds):
+    """pair_relmse of a setting's rounds at `seconds`: where its rounds were bracketed (the same
+    counts in every round), the pairs of each count at its own mean time, then at_time()."""
+    runs = [x[6] if len(x) > 6 else [(x[2], x[3], x[5])] for x in xs]
+    if len({tuple(n for n, _, _ in r) for r in runs}) != 1 or len(runs[0]) == 1:
+        return pair_relmse([(x[5], x[3]) for x in xs], ref, seconds)
+    points = []
+    for k in range(len(runs[0])):
+        t = statistics.mean(r[k][1] for r in runs)
+        points.append((t, pair_relmse([(r[k][2], t) for r in runs], ref, t)))
+    return at_time(points, seconds)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scenes", nargs="+")
@@ -159,6 +214,9 @@ def main():
     ap.add_argument("--illum", default=os.path.join(HERE, "..", "target", "release", "illum"))
     ap.add_argument("--out", default="/tmp/compare-mitsuba")
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--bracket", action="store_true",
+                    help="a Mitsuba count that took over 1.25 T: also render the next count "
+                         "below, and read relMSE at T in log-log between both")
     ap.add_argument("--mi-sampler", default="independent",
                     help="Mitsuba's sampler: independent (its default), ldsampler (scrambled "
                          "(0,2)-sequence, power-of-two counts), multijitter, ...")
@@ -198,11 +256,13 @@ def main():
         for r in range(a.rounds):
             for label, mm in ms.items():
                 out = os.path.join(a.out, "%s-%s-%d.exr" % (name, re.sub(r"\W", "_", label), r))
-                spp, wall = mm.timed(a.time, r + 1, out)
-                img = rgb(out)
-                e = relmse(img, ref) * wall / a.time
+                runs = mm.bracketed(a.time, r + 1, out) if a.bracket else [mm.timed(a.time, r + 1, out) + (out,)]
+                imgs = [rgb(path) for _, _, path in runs]
+                e = at_time([(w, relmse(img, ref)) for (_, w, _), img in zip(runs, imgs)], a.time)
+                spp, wall, _ = runs[-1]
                 rows[label].append((e, spp * mm.pixels / wall / 1e6, spp, wall,
-                                    img.mean() / ref.mean(), img))
+                                    imgs[-1].mean() / ref.mean(), imgs[-1],
+                                    [(n, w, img) for (n, w, _), img in zip(runs, imgs)]))
             for label, opts in sets:
                 out = os.path.join(a.out, "%s-%s-%d.exr" % (name, re.sub(r"\W", "_", label), r))
                 spp, secs, rate = illum(a.illum, scene, a.time, r + 1, opts, out)
@@ -211,7 +271,7 @@ def main():
                 rows[label].append((e, rate, spp, secs, img.mean() / ref.mean(), img))
         best = min(ms, key=lambda k: statistics.median(x[0] for x in rows[k]))
         mine = statistics.median(x[0] for x in rows[best])
-        pairs = {k: pair_relmse([(x[5], x[3]) for x in xs], ref, a.time) for k, xs in rows.items()}
+        pairs = {k: pairs_at_time(xs, ref, a.time) for k, xs in rows.items()}
         print("\n%s (Mitsuba warm-up render incl. JIT: %.2f s; best Mitsuba setting: %s)"
               % (scene, m.warmup_s, best))
         print("| renderer / illum options | relMSE at %g s | x Mitsuba | from pairs | x Mitsuba "
