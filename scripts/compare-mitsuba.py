@@ -130,13 +130,7 @@ class Mitsuba:
         # the count up (bracketed() reads that one at `seconds`).
         for _ in range(3):
             ask = max(1, round(seconds * self.rate / self.pixels))
-            # Kernels may take the sample count as a constant (multijitter's and ldsampler's
-            # do): a new count compiles them again (0.5-0.8 s on 2 cores), which a render of
-            # that count once, untimed, leaves out.
-            self.render(ask, seed + 7919)
-            t = time.time()
-            img, spp = self.render(ask, seed)
-            wall = time.time() - t
+            img, spp, wall = self.measured(ask, seed)
             self.rate = spp * self.pixels / wall
             if 0.8 * seconds <= wall <= 1.25 * seconds or spp > 1.25 * ask:
                 break
@@ -144,22 +138,30 @@ class Mitsuba:
             mi.Bitmap(np.asarray(img, dtype=np.float32)).write(out)
         return spp, wall
 
+    def measured(self, ask, seed):
+        """A render of `ask` samples timed alone: (image, samples rendered, seconds). Kernels
+        may take the sample count as a constant (multijitter's and ldsampler's do): a new count
+        compiles them again (0.5-0.8 s on 2 cores), which a render of that count once, untimed,
+        leaves out."""
+        self.render(ask, seed + 7919)
+        t = time.time()
+        img, spp = self.render(ask, seed)
+        return img, spp, time.time() - t
+
     def bracketed(self, seconds, seed, out):
         """timed(), and where its count took more than 1.25 seconds (the sampler rounded it up),
         also the next count below that the sampler renders: [(spp, wall, path)], longest last."""
         spp, wall = self.timed(seconds, seed, out)
         runs = [(spp, wall, out)]
+        if wall <= 1.25 * seconds:
+            return runs
         ask = spp // 2
-        while wall > 1.25 * seconds and ask >= 1:
-            self.render(ask, seed + 7919)
-            t = time.time()
-            img, n = self.render(ask, seed)
-            w = time.time() - t
+        while ask >= 1:
+            img, n, w = self.measured(ask, seed)
             if n < spp:
                 low = out.replace(".exr", "-low.exr")
                 mi.Bitmap(np.asarray(img, dtype=np.float32)).write(low)
-                runs.insert(0, (n, w, low))
-                break
+                return [(n, w, low)] + runs
             ask //= 2
         return runs
 
