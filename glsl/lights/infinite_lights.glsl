@@ -55,12 +55,13 @@ LightHit sun_hit(GpuLight l, vec3 w) {
 // ---------------------------------------------------------------------------------------------
 // Dome
 
-// Index i with cdf[i] <= u < cdf[i + 1] among n intervals (cdf[0] = 0, cdf[n] = 1, non-decreasing);
-// only intervals of positive width can be returned for u in [0, 1). The guide (one uvec2 per bucket
-// of width 1/n in u, src/gpu_scene/dome.rs) bounds the binary search to the few intervals that
-// bucket can reach: it returns the same index as a search over all n, in O(1) expected steps.
-uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint n, float u) {
-    uvec2 r = guide.v[gbase + min(floor_uint(u * float(n)), n - 1u)];
+// Index i with cdf[i] <= u < cdf[i + 1] among the CDF's intervals (cdf[0] = 0, cdf[n] = 1,
+// non-decreasing); only intervals of positive width can be returned for u in [0, 1). The guide
+// (one uvec2 per bucket of width 1/m in u, m a multiple of n: src/gpu_scene/dome.rs) bounds the
+// binary search to the few intervals that bucket can reach: it returns the same index as a
+// search over all n, in O(1) expected steps.
+uint cdf_find(DomeCdfRef cdf, uint base, DomeGuideRef guide, uint gbase, uint m, float u) {
+    uvec2 r = guide.v[gbase + min(floor_uint(u * float(m)), m - 1u)];
     uint lo = r.x, hi = r.y;   // invariant: cdf[lo] <= u < cdf[hi] (cdf[n] = 1 > u)
     while (hi - lo > 1u) {
         uint mid = (lo + hi) >> 1u;
@@ -261,12 +262,12 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     float uy = min(u.y, 0.99999994);
     DomeCdfRef marg = DomeCdfRef(ds.marginal);
     DomeCdfRef cond = DomeCdfRef(ds.conditional);
-    // The guides follow the conditional CDFs: H buckets of the marginal, then W per row.
+    // The guides follow the conditional CDFs: the marginal's buckets, then each row's.
     DomeGuideRef guide = DomeGuideRef(ds.conditional + 4ul * uint64_t(H * (W + 1u)));
-    uint j = cdf_find(marg, 0u, guide, 0u, H, ux);
+    uint j = cdf_find(marg, 0u, guide, 0u, ds.marginal_buckets, ux);
     float m0 = marg.v[j], m1 = marg.v[j + 1u];
     uint base = j * (W + 1u);
-    uint i = cdf_find(cond, base, guide, H + j * W, W, uy);
+    uint i = cdf_find(cond, base, guide, ds.marginal_buckets + j * W, W, uy);
     float c0 = cond.v[base + i], c1 = cond.v[base + i + 1u];
     float pm = m1 - m0, pc = c1 - c0;
     if (!(pm > 0.0) || !(pc > 0.0)) return s;

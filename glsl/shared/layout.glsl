@@ -420,6 +420,10 @@ struct GpuDomeSampling {
                            // 0 in the buffer, set by dome_sampling() (lights/lights.glsl) under control variates
     uint shape;            // DOME_SHAPE_*: the density inside a cell
     uint nodes_width;      // map width + 2 (0 without nodes)
+    uint marginal_buckets; // guide buckets of the marginal CDF (a multiple of height; each row's: width)
+    uint pad0;             // sh at a 16-byte offset in scalar and std430 alike
+    uint pad1;
+    uint pad2;
     vec4 sh[9];            // xyz: the dome's radiance (colour included) projected on real SH9 in world
                            // directions, order (l, m) = 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22
                            // (src/gpu_scene/dome_sh.rs): the control variate's L_SH

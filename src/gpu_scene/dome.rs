@@ -40,9 +40,11 @@ pub struct DomeTable {
     pub conditional: Vec<f32>,
     /// Mean texel weight (before normalisation).
     pub integral: f64,
-    /// Search guides: `height` buckets of the marginal, then `width` per row of the conditionals,
-    /// each the `[lo, hi)` range of intervals a sample in that bucket can fall in.
+    /// Search guides: `marginal_buckets` of the marginal, then `width` per row of the
+    /// conditionals, each the `[lo, hi)` range of intervals a sample in that bucket can fall in.
     pub guides: Vec<[u32; 2]>,
+    /// Buckets of the marginal's guide: `MARGINAL_GUIDE` height.
+    pub marginal_buckets: u32,
     /// The dome's radiance on SH9 in world directions (src/gpu_scene/dome_sh.rs), set by the
     /// caller: the control variates' L_SH.
     pub sh: [[f32; 4]; 9],
@@ -178,12 +180,13 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     };
     let grand: f64 = row_sums.iter().sum();
     let marginal = cdf(&row_sums, grand);
-    let mut guides = guide(&marginal);
+    let mut guides = guide(&marginal, MARGINAL_GUIDE);
     for row in conditional.chunks(w + 1) {
-        guides.extend(guide(row));
+        guides.extend(guide(row, 1));
     }
     DomeTable {
         guides,
+        marginal_buckets: h as u32 * MARGINAL_GUIDE,
         sh: [[0.0; 4]; 9],
         shape,
         nodes,
@@ -310,15 +313,26 @@ fn cdf(weights: &[f64], sum: f64) -> Vec<f32> {
     out
 }
 
-/// Search guide of a CDF of n intervals (n + 1 entries, see `cdf`): for bucket k of u in
-/// [k/n, (k+1)/n), widened by `GUIDE_MARGIN` on both sides, the range `[lo, hi)` of the index i
-/// with `cdf[i] <= u < cdf[i + 1]` (the GPU's `cdf_find`; monotone in u, so the ends suffice).
-fn guide(cdf: &[f32]) -> Vec<[u32; 2]> {
+/// Guide buckets per interval of the marginal CDF. Where a sun's rows take most of the mass the
+/// other rows crowd the remaining buckets, and each step of the binary search after the guide is
+/// a gather on lavapipe: with one bucket a row, a group of 8 lanes waited for 2.3 steps on
+/// mitsuba-dome's sky, with 16 for 0.4, and the render took 0.94x the time (pixels identical).
+/// The row CDFs keep one bucket a cell: finer row guides (4 or 16 a cell, 1-4 MB on that map)
+/// were no faster, their cache misses costing what the saved steps gained
+/// (docs/performance-kernels.md, "A finer guide for the dome's marginal").
+pub const MARGINAL_GUIDE: u32 = 16;
+
+/// Search guide of a CDF of n intervals (n + 1 entries, see `cdf`) in m = `factor` n buckets:
+/// for bucket k of u in [k/m, (k+1)/m), widened by `GUIDE_MARGIN` on both sides, the range
+/// `[lo, hi)` of the index i with `cdf[i] <= u < cdf[i + 1]` (the GPU's `cdf_find`; monotone in
+/// u, so the ends suffice).
+fn guide(cdf: &[f32], factor: u32) -> Vec<[u32; 2]> {
     const GUIDE_MARGIN: f64 = 1e-6;
     const U_MAX: f32 = 0.999_999_94; // the GPU clamps u to this
     let n = cdf.len() - 1;
+    let m = n * factor as usize;
     // index(x) = (entries of cdf[..n] <= x).max(1) - 1; both ends rise with k, so each is a
-    // pointer swept once along the CDF (the same indices as a binary search, in O(n)).
+    // pointer swept once along the CDF (the same indices as a binary search, in O(m)).
     let sweep = |p: &mut usize, x: f64| {
         let x = (x.max(0.0) as f32).min(U_MAX);
         while *p < n && cdf[*p] <= x {
@@ -327,10 +341,10 @@ fn guide(cdf: &[f32]) -> Vec<[u32; 2]> {
         (*p).max(1) - 1
     };
     let (mut lo_p, mut hi_p) = (0, 0);
-    (0..n)
+    (0..m)
         .map(|k| {
-            let lo = sweep(&mut lo_p, k as f64 / n as f64 - GUIDE_MARGIN);
-            let hi = sweep(&mut hi_p, (k + 1) as f64 / n as f64 + GUIDE_MARGIN) + 1;
+            let lo = sweep(&mut lo_p, k as f64 / m as f64 - GUIDE_MARGIN);
+            let hi = sweep(&mut hi_p, (k + 1) as f64 / m as f64 + GUIDE_MARGIN) + 1;
             [lo as u32, hi as u32]
         })
         .collect()
@@ -409,11 +423,13 @@ impl DomeTable {
                 + 8 * self.guides.len() as u64,
             shape: self.shape,
             nodes_width: self.nodes_width,
+            marginal_buckets: self.marginal_buckets,
             width: self.width,
             height: self.height,
             integral: self.integral as f32,
             defensive: 0.0,
             sh: self.sh,
+            ..Default::default()
         }
     }
 

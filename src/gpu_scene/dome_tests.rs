@@ -112,10 +112,11 @@ fn guides_bracket_the_full_search() {
     );
     let check = |cdf: &[f32], guides: &[[u32; 2]]| {
         let n = cdf.len() - 1;
+        let m = guides.len();
         for s in 0..=100_000u32 {
             let u = (s as f32 / 100_000.0).min(0.999_999_94);
             let full = cdf[..n].partition_point(|&c| c <= u) - 1;
-            let [lo, hi] = guides[((u * n as f32) as usize).min(n - 1)];
+            let [lo, hi] = guides[((u * m as f32) as usize).min(m - 1)];
             assert!(
                 lo as usize <= full && full < hi as usize,
                 "u {u}: {full} not in [{lo}, {hi})"
@@ -123,11 +124,14 @@ fn guides_bracket_the_full_search() {
             assert!(cdf[lo as usize] <= u && u < cdf[hi as usize]);
         }
     };
-    check(&t.marginal, &t.guides[..h as usize]);
+    let (mb, rb) = (t.marginal_buckets as usize, w as usize);
+    assert_eq!(mb, MARGINAL_GUIDE as usize * h as usize);
+    assert_eq!(t.guides.len(), mb + h as usize * rb);
+    check(&t.marginal, &t.guides[..mb]);
     for j in 0..h as usize {
         let row = &t.conditional[j * (w as usize + 1)..(j + 1) * (w as usize + 1)];
-        let g0 = h as usize + j * w as usize;
-        check(row, &t.guides[g0..g0 + w as usize]);
+        let g0 = mb + j * rb;
+        check(row, &t.guides[g0..g0 + rb]);
     }
 }
 
@@ -140,7 +144,7 @@ fn the_row_by_row_build_equals_the_per_texel_weights() {
     let (tw, th) = (7u32, 5u32);
     let texels: Vec<Vec4> = (0..tw * th)
         .map(|k| {
-            let x = ((k * 2_654_435_761) % 1000) as f32 / 100.0;
+            let x = (k.wrapping_mul(2_654_435_761) % 1000) as f32 / 100.0;
             Vec4::new(x, 0.5 * x + (k % 3) as f32, 1.0 / (1.0 + x), 1.0)
         })
         .collect();
@@ -231,13 +235,16 @@ fn the_guide_sweep_equals_the_binary_search() {
             let x = (x.max(0.0) as f32).min(0.999_999_94);
             c[..n].partition_point(|&v| v <= x).max(1) - 1
         };
-        let expected: Vec<[u32; 2]> = (0..n)
-            .map(|k| {
-                let lo = index(k as f64 / n as f64 - 1e-6);
-                let hi = index((k + 1) as f64 / n as f64 + 1e-6) + 1;
-                [lo as u32, hi as u32]
-            })
-            .collect();
-        assert_eq!(guide(&c), expected, "n {n}");
+        for factor in [1u32, 4, 16] {
+            let m = n * factor as usize;
+            let expected: Vec<[u32; 2]> = (0..m)
+                .map(|k| {
+                    let lo = index(k as f64 / m as f64 - 1e-6);
+                    let hi = index((k + 1) as f64 / m as f64 + 1e-6) + 1;
+                    [lo as u32, hi as u32]
+                })
+                .collect();
+            assert_eq!(guide(&c, factor), expected, "n {n}, {factor} buckets an interval");
+        }
     }
 }
