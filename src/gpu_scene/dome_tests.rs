@@ -244,7 +244,11 @@ fn the_guide_sweep_equals_the_binary_search() {
                     [lo as u32, hi as u32]
                 })
                 .collect();
-            assert_eq!(guide(&c, factor), expected, "n {n}, {factor} buckets an interval");
+            assert_eq!(
+                guide(&c, factor),
+                expected,
+                "n {n}, {factor} buckets an interval"
+            );
         }
     }
 }
