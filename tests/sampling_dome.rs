@@ -57,6 +57,7 @@ fn dome_case(
     sub: usize,
     seed: u32,
     defensive: f32,
+    corners: bool,
 ) {
     let table = dome::build(tex, tint, conv);
     let data = g
@@ -67,14 +68,25 @@ fn dome_case(
             ash::vk::BufferUsageFlags::STORAGE_BUFFER,
         )
         .unwrap();
+    // With `corners`, the map's texels where a Mitsuba-convention sampler reads its cell's
+    // corners (GpuDomeSampling.texels), under a light of the table's colour.
+    let texels = g
+        .ctx
+        .upload(
+            "dome texels",
+            &tex.texels,
+            ash::vk::BufferUsageFlags::STORAGE_BUFFER,
+        )
+        .unwrap();
     let mut l = dome_light(rot_deg);
+    l.radiance = tint.to_array();
     l.flags |= match conv {
         DomeConvention::Illum => 0,
         DomeConvention::Mitsuba => LIGHT_FLAG_DOME_MITSUBA,
         DomeConvention::Pbrt => LIGHT_FLAG_DOME_PBRT,
     };
     let mut prm = LightParams {
-        dome: table.gpu(data.address),
+        dome: table.gpu(data.address, if corners { texels.address } else { 0 }),
         light: l,
         p: [0.0; 4],
     };
@@ -233,7 +245,29 @@ fn dome_case(
         seed,
         &ambiguous,
     );
-    drop(data);
+    // A sampler that read its cell's corners returns the lookup's radiance there (f64, the
+    // convention's own lookup); one that did not, none (light_radiance() then looks it up).
+    let out = g.sample(&prm, 4096, seed + 1000);
+    for i in (0..4096).filter(|&i| out.pdf(i) > 0.0) {
+        let le = out.x(i);
+        if !corners {
+            assert!(
+                le.x < 0.0,
+                "{name}: sample {i} has a radiance {le} it did not read"
+            );
+            continue;
+        }
+        let (u, v) = out.uv(i);
+        let expected = tint.as_dvec3()
+            * dome_map::lookup(tex, conv, DVec2::new(u, v))
+                .truncate()
+                .max(DVec3::ZERO);
+        assert!(
+            (le - expected).abs().max_element() <= 1e-4 * expected.max_element() + 1e-6,
+            "{name}: sample {i} at ({u}, {v}): radiance {le} against the lookup's {expected}"
+        );
+    }
+    drop((data, texels));
 }
 
 #[test]
@@ -257,6 +291,7 @@ fn chi2_dome() {
         2,
         60,
         0.0,
+        false,
     );
     dome_case(
         &g,
@@ -268,6 +303,20 @@ fn chi2_dome() {
         2,
         63,
         0.0,
+        false,
+    );
+    // The same, its corners read by the sampler for the cell's shape and the sample's radiance.
+    dome_case(
+        &g,
+        "Mitsuba dome hot pixel, corners read",
+        &hot,
+        Vec3::new(1.0, 0.8, 0.6),
+        30.0,
+        DomeConvention::Mitsuba,
+        2,
+        66,
+        0.0,
+        true,
     );
     // A smooth sky: brighter toward the zenith and toward one azimuth, tinted.
     let sky = texture("sky", 64, 32, |i, j| {
@@ -286,6 +335,19 @@ fn chi2_dome() {
         2,
         61,
         0.0,
+        false,
+    );
+    dome_case(
+        &g,
+        "Mitsuba dome sky, corners read",
+        &sky,
+        Vec3::new(1.0, 0.9, 0.7),
+        -75.0,
+        DomeConvention::Mitsuba,
+        2,
+        67,
+        0.0,
+        true,
     );
     // pbrt's equal-area square: a hot texel near a crease of the octahedral map, over a gradient.
     let square = texture("square", 16, 16, |i, j| {
@@ -306,6 +368,7 @@ fn chi2_dome() {
         2,
         64,
         0.0,
+        false,
     );
     // The same with the uniform share of control variates: the equal-area square keeps both
     // parts' densities constant per bin, so the chi-square quadrature stays exact.
@@ -319,6 +382,7 @@ fn chi2_dome() {
         2,
         65,
         0.3,
+        false,
     );
     // No table: uniform over the sphere.
     let prm = params(dome_light(0.0), DVec3::ZERO);

@@ -298,7 +298,7 @@ ShadowCandidate direct_light_sample(DirectPlan plan, Shading sh, GpuMaterial m, 
            : group_u(grp, rng, grp.j - 1u, stratify_rows(l, plan.dome));
     LightSample ls = sample_light(l, plan.dome, sh.p, sh.n, u);
     if (!(ls.pdf > 0.0)) return no_shadow_candidate();
-    vec3 le = light_radiance(l, ls.uv, ls.delta);
+    vec3 le = ls.le.x >= 0.0 ? ls.le : light_radiance(l, ls.uv, ls.delta);
     vec3 f = eval_lobes(sh, m, ls.wi, ls.delta ? 0.0 : n_l * ls.pdf, plan.technique, plan.diffuse_mis, plan.n_b);
     // Divide by the expected count n_l (many lights: the selection probability is in it).
     vec3 c = f * le / (ls.pdf * n_l);

@@ -16,6 +16,7 @@
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeCdfRef { float v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeGuideRef { uvec2 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer DomeTexelRef { vec4 v[]; };
 
 // ---------------------------------------------------------------------------------------------
 // Sun
@@ -86,15 +87,40 @@ float dome_node(DomeCdfRef nodes, uint stride, int i, int j) {
     return abs(nodes.v[uint(j + 1) * stride + uint(i + 1)]);
 }
 
-// The nodes of cell (i, j); false when the density is uniform there.
-bool dome_cell(GpuDomeSampling ds, uint i, uint j, out DomeCell c) {
+// The four texels at the corners of a Mitsuba-convention cell (i, j) (GpuDomeSampling.texels):
+// its lookup's bilinear patch, top row (t00, t10) and bottom row (t01, t11), periodic in u.
+struct DomeCorners { vec3 t00, t10, t01, t11; };
+
+// Whether a light sample reads its cell's corners itself (dome_corners) instead of the nodes and
+// the texture lookup: a Mitsuba-convention map whose texels the host gave.
+bool dome_reads_corners(GpuLight l, GpuDomeSampling ds) { return dome_is_mitsuba(l) && ds.texels != 0ul; }
+
+DomeCorners dome_corners(GpuDomeSampling ds, uint i, uint j) {
+    DomeTexelRef t = DomeTexelRef(ds.texels);
+    uint w = ds.width;   // Mitsuba's cells: one column a texel column
+    uint r0 = j * w, r1 = r0 + w, i1 = i + 1u == w ? 0u : i + 1u;
+    return DomeCorners(t.v[r0 + i].rgb, t.v[r0 + i1].rgb, t.v[r1 + i].rgb, t.v[r1 + i1].rgb);
+}
+
+// The radiance of light l's map at f in a cell of corners k: the lookup's bilinear patch.
+vec3 dome_corner_radiance(GpuLight l, DomeCorners k, vec2 f) {
+    return l.radiance * mix(mix(k.t00, k.t10, f.x), mix(k.t01, k.t11, f.x), f.y);
+}
+
+// The nodes of cell (i, j); false when the density is uniform there. With corners (`read`,
+// Mitsuba's cells), their luminance under the light's colour, as the host's nodes hold it.
+bool dome_cell(GpuLight l, GpuDomeSampling ds, uint i, uint j, bool read, DomeCorners k, out DomeCell c) {
     c = DomeCell(ds.shape == DOME_SHAPE_CORNERS, vec2(1.0), vec2(1.0), vec3(1.0), vec3(1.0), vec3(1.0));
     if (!has_feature(FEATURE_DOME_SHAPED) || ds.shape == DOME_SHAPE_UNIFORM) return false;
     DomeCdfRef nodes = DomeCdfRef(ds.nodes);
     uint s = ds.nodes_width;
     int x = int(i), y = int(j);
     if ((floatBitsToUint(nodes.v[(j + 1u) * s + i + 1u]) & 0x80000000u) == 0u) return false;
-    if (c.bilinear) {
+    if (c.bilinear && read) {
+        vec3 tint = l.radiance;
+        c.t = max(vec2(luminance(tint * k.t00), luminance(tint * k.t10)), 0.0);
+        c.b = max(vec2(luminance(tint * k.t01), luminance(tint * k.t11)), 0.0);
+    } else if (c.bilinear) {
         // Mitsuba: corners are texels (i, j) .. (i + 1, j + 1), the nodes wrapped in u already.
         c.t = vec2(dome_node(nodes, s, x, y), dome_node(nodes, s, x + 1, y));
         c.b = vec2(dome_node(nodes, s, x, y + 1), dome_node(nodes, s, x + 1, y + 1));
@@ -211,7 +237,9 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     float jacobian = dome_jacobian(l, w);
     if (!(jacobian > 0.0)) return 0.0;
     DomeCell c;
-    float shape = dome_cell(ds, i, j, c)
+    bool read = dome_reads_corners(l, ds) && ds.shape == DOME_SHAPE_CORNERS;
+    DomeCorners k = read ? dome_corners(ds, i, j) : DomeCorners(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    float shape = dome_cell(l, ds, i, j, read, k, c)
         ? dome_shape_density(c, clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0))
         : 1.0;
     return pm * pc * shape * float(W * H) / jacobian;
@@ -272,8 +300,12 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     float pm = m1 - m0, pc = c1 - c0;
     if (!(pm > 0.0) || !(pc > 0.0)) return s;
     vec2 f = clamp(vec2((uy - c0) / pc, (ux - m0) / pm), 0.0, 1.0);
+    // A Mitsuba-convention cell's corners, read once for its shape and the sample's radiance.
+    bool read = dome_reads_corners(l, ds);
+    DomeCorners k = read ? dome_corners(ds, i, j) : DomeCorners(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     DomeCell c;
-    float shape = dome_cell(ds, i, j, c) ? dome_shape_warp(c, f) : 1.0;
+    float shape = dome_cell(l, ds, i, j, read, k, c) ? dome_shape_warp(c, f) : 1.0;
+    if (read) s.le = dome_corner_radiance(l, k, f);
     vec2 uv = vec2((float(i) + f.x) / float(W) + dome_cell_offset(l, W), (float(j) + f.y) / float(H));
     if (uv.x >= 1.0) uv.x -= 1.0;
     float jacobian;

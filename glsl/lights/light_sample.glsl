@@ -16,6 +16,8 @@ struct LightSample {
     vec3 n;       // geometric normal of the emitter at x (area lights)
     bool delta;   // delta light (sun of zero angular size): pdf is 1, no MIS
     vec2 uv;      // texture coordinates on the light (see above)
+    vec3 le;      // the radiance toward p where the sampler read it (a Mitsuba-convention dome with its
+                  // texels: its cell's corners); negative: not read, light_radiance() gives it
 };
 
 // What a direction w from p sees of one light: the pdf the light's sampler has for w (0 if it never
@@ -49,6 +51,7 @@ LightSample no_light_sample() {
     s.n = vec3(0.0, 0.0, 1.0);
     s.delta = false;
     s.uv = vec2(0.0);
+    s.le = vec3(-1.0);
     return s;
 }
 

@@ -49,7 +49,9 @@
 //   from guide tables), then a uniform position inside the cell:
 //   pdf = P(row) P(cell | row) W H / (dω / du dv), 2 pi^2 sin(theta) for lat-long maps, 4 pi for
 //   the equal-area square. Probabilities are differences of the stored float CDFs, which is
-//   exactly the mass the binary search gives each cell. Without a table (width == 0) the dome is
+//   exactly the mass the binary search gives each cell. With the Mitsuba convention and the map's
+//   texels given (GpuDomeSampling.texels) the sampler reads its cell's corners once, for the
+//   cell's shape and the sample's radiance (LightSample.le). Without a table (width == 0) the dome is
 //   sampled uniformly (pdf = 1 / (4 pi)). LightSample.uv / LightHit.uv are map coordinates.
 //   Defensive mixture (GpuDomeSampling.defensive = a > 0, under control variates): a share a of
 //   the samples is uniform over the sphere, pdf = a / (4 pi) + (1 - a) p_table, positive in every

@@ -413,6 +413,9 @@ struct GpuDomeSampling {
     uint64_t nodes;        // float[(map width + 2) (map height + 2)]: the luminance the cells' shape
                            // is drawn from (DOME_SHAPE_*), texel (i, j) at (j + 1) (map width + 2) + i + 1
                            // for i in -1 ..= map width, j in -1 ..= map height, wrapped as the lookup wraps
+    uint64_t texels;       // the map's first texel (vec4) in the texel buffer, 0: none. With the Mitsuba
+                           // convention a light sample reads its cell's four corner texels there once,
+                           // for the cell's shape and its radiance (sample_dome)
     uint width;
     uint height;
     float integral;        // mean texel weight (sum / (width height)), for diagnostics
@@ -422,8 +425,6 @@ struct GpuDomeSampling {
     uint nodes_width;      // map width + 2 (0 without nodes)
     uint marginal_buckets; // guide buckets of the marginal CDF (a multiple of height; each row's: width)
     uint pad0;             // sh at a 16-byte offset in scalar and std430 alike
-    uint pad1;
-    uint pad2;
     vec4 sh[9];            // xyz: the dome's radiance (colour included) projected on real SH9 in world
                            // directions, order (l, m) = 00, 1-1, 10, 11, 2-2, 2-1, 20, 21, 22
                            // (src/gpu_scene/dome_sh.rs): the control variate's L_SH

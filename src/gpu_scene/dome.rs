@@ -45,6 +45,9 @@ pub struct DomeTable {
     pub guides: Vec<[u32; 2]>,
     /// Buckets of the marginal's guide: `MARGINAL_GUIDE` height.
     pub marginal_buckets: u32,
+    /// The map's first texel in the scene's texel buffer (set by the caller, which knows the
+    /// textures before it).
+    pub texel_offset: u64,
     /// The dome's radiance on SH9 in world directions (src/gpu_scene/dome_sh.rs), set by the
     /// caller: the control variates' L_SH.
     pub sh: [[f32; 4]; 9],
@@ -187,6 +190,7 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     DomeTable {
         guides,
         marginal_buckets: h as u32 * MARGINAL_GUIDE,
+        texel_offset: 0,
         sh: [[0.0; 4]; 9],
         shape,
         nodes,
@@ -413,8 +417,10 @@ impl DomeTable {
         ]
     }
 
-    /// The GPU descriptor of the tables uploaded as [`DomeTable::parts`] at device address `address`.
-    pub fn gpu(&self, address: u64) -> GpuDomeSampling {
+    /// The GPU descriptor of the tables uploaded as [`DomeTable::parts`] at device address
+    /// `address`, the map's texels in the texel buffer at `texels` (0: not given; the light
+    /// samples then look their radiance up as any ray does).
+    pub fn gpu(&self, address: u64, texels: u64) -> GpuDomeSampling {
         GpuDomeSampling {
             marginal: address,
             conditional: address + 4 * self.marginal.len() as u64,
@@ -424,6 +430,11 @@ impl DomeTable {
             shape: self.shape,
             nodes_width: self.nodes_width,
             marginal_buckets: self.marginal_buckets,
+            texels: if texels == 0 {
+                0
+            } else {
+                texels + 16 * self.texel_offset
+            },
             width: self.width,
             height: self.height,
             integral: self.integral as f32,

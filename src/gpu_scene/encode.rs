@@ -467,8 +467,15 @@ fn dome_table(
 ) -> Option<dome::DomeTable> {
     let (i, convention) = dome_source?;
     let l = &scene.lights[i];
-    l.texture
-        .map(|t| dome_sh::table(&scene.textures[t as usize], l, convention))
+    l.texture.map(|t| {
+        let mut table = dome_sh::table(&scene.textures[t as usize], l, convention);
+        // As encode_textures lays the texels out: one texture after the other.
+        table.texel_offset = scene.textures[..t as usize]
+            .iter()
+            .map(|x| x.texels.len() as u64)
+            .sum();
+        table
+    })
 }
 
 fn v3(v: Vec3) -> [f32; 3] {

@@ -103,22 +103,23 @@ impl Tables {
     /// The tables of `h`, encoded from `scene` (whose textures' texels are uploaded as they are).
     pub(crate) fn upload(ctx: &Context, h: &Host, scene: &Scene) -> Result<Tables> {
         let dome_data = Table::upload_parts(ctx, "dome CDFs", &dome_parts(h))?;
-        let sampling = dome_sampling(h, &dome_data);
+        let texels = Table::upload_parts(
+            ctx,
+            "texels",
+            &scene
+                .textures
+                .iter()
+                .map(|t| bytes(&t.texels))
+                .collect::<Vec<_>>(),
+        )?;
+        let sampling = dome_sampling(h, &dome_data, &texels);
         Ok(Tables {
             instances: Table::upload(ctx, "instances", bytes(&h.gpu_instances))?,
             materials: Table::upload(ctx, "materials", bytes(&h.materials))?,
             shapes: Table::upload(ctx, "shapes", bytes(&h.shapes))?,
             lights: Table::upload(ctx, "lights", bytes(&h.lights))?,
             textures: Table::upload(ctx, "textures", bytes(&h.textures))?,
-            texels: Table::upload_parts(
-                ctx,
-                "texels",
-                &scene
-                    .textures
-                    .iter()
-                    .map(|t| bytes(&t.texels))
-                    .collect::<Vec<_>>(),
-            )?,
+            texels,
             light_nodes: Table::upload(ctx, "light BVH nodes", bytes(&h.light_bvh.nodes))?,
             light_refs: Table::upload(ctx, "light BVH references", bytes(&h.light_bvh.refs))?,
             light_tree: Table::upload(ctx, "light tree", bytes(tree_nodes(h)))?,
@@ -168,10 +169,10 @@ fn tree_trails(h: &Host) -> &[u32] {
     h.light_tree.as_ref().map_or(&[][..], |t| &t.trails[..])
 }
 
-fn dome_sampling(h: &Host, data: &Table) -> Vec<GpuDomeSampling> {
+fn dome_sampling(h: &Host, data: &Table, texels: &Table) -> Vec<GpuDomeSampling> {
     h.dome_table
         .as_ref()
-        .map(|t| t.gpu(data.address()))
+        .map(|t| t.gpu(data.address(), texels.address()))
         .into_iter()
         .collect()
 }
@@ -270,7 +271,7 @@ impl GpuScene {
         put(&mut t.light_tree, &[bytes(tree_nodes(&h))])?;
         put(&mut t.light_trails, &[bytes(tree_trails(&h))])?;
         put(&mut t.dome_data, &dome_parts(&h))?;
-        let sampling = dome_sampling(&h, &t.dome_data);
+        let sampling = dome_sampling(&h, &t.dome_data, &t.texels);
         put(&mut t.dome_sampling, &[bytes(&sampling)])?;
         let instances_moved = h.instances != self.instances;
         self.tables.write_frame(&mut self.frame, &h);

@@ -1,6 +1,7 @@
 // Test kernel of glsl/lights/light_sampling.glsl (tests/sampling.rs). Push constants: mode, count,
 // seed. Mode 0: `count` samples of sample_light() at p with u = rng(seed, i), each as four vec4
-// (wi, pdf), (x, light_pdf(wi)), (uv, dist, light_hit(wi).t), (n, delta). Mode 1: light_hit() of
+// (wi, pdf), (x, light_pdf(wi)), (uv, dist, light_hit(wi).t), (n, delta); for a dome
+// le in place of x (negative where the sampler did not read it). Mode 1: light_hit() of
 // the directions in the input: (pdf, t, uv).
 #version 460
 #extension GL_EXT_scalar_block_layout : require
@@ -28,7 +29,7 @@ void main() {
         LightSample s = sample_light(prm.light, prm.dome, p, vec3(0.0), u);
         LightHit h = light_hit(prm.light, prm.dome, p, vec3(0.0), s.wi);
         outputs[4u * i] = vec4(s.wi, s.pdf);
-        outputs[4u * i + 1u] = vec4(s.x, h.pdf);
+        outputs[4u * i + 1u] = vec4(prm.light.kind == LIGHT_DOME ? s.le : s.x, h.pdf);
         outputs[4u * i + 2u] = vec4(s.uv, s.dist, h.t);
         outputs[4u * i + 3u] = vec4(s.n, float(s.delta));
     } else {

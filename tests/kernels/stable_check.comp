@@ -43,7 +43,7 @@ void main() {
     if (i >= pc.y) return;
     Record q = inputs[i];
     uint kind = uint(q.e.w);
-    GpuDomeSampling no_dome = GpuDomeSampling(0ul, 0ul, 0ul, 0u, 0u, 0.0, 0.0, 0u, 0u, 0u, 0u, 0u, 0u, vec4[9](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0)));
+    GpuDomeSampling no_dome = GpuDomeSampling(0ul, 0ul, 0ul, 0ul, 0u, 0u, 0.0, 0.0, 0u, 0u, 0u, 0u, vec4[9](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0)));
     Result res;
     res.r0 = vec4(0.0);
     res.r1 = vec4(0.0);
