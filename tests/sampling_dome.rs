@@ -59,7 +59,8 @@ fn dome_case(
     defensive: f32,
     corners: bool,
 ) {
-    let table = dome::build(tex, tint, conv);
+    let mut table = dome::build(tex, tint, conv);
+    table.texel_offset = Some(0);
     let data = g
         .ctx
         .upload_parts(

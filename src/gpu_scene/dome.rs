@@ -46,8 +46,8 @@ pub struct DomeTable {
     /// Buckets of the marginal's guide: `MARGINAL_GUIDE` height.
     pub marginal_buckets: u32,
     /// The map's first texel in the scene's texel buffer (set by the caller, which knows the
-    /// textures before it).
-    pub texel_offset: u64,
+    /// textures before it); None: light samples do not read the map's texels themselves.
+    pub texel_offset: Option<u64>,
     /// The dome's radiance on SH9 in world directions (src/gpu_scene/dome_sh.rs), set by the
     /// caller: the control variates' L_SH.
     pub sh: [[f32; 4]; 9],
@@ -190,7 +190,7 @@ pub fn build(texture: &Texture, tint: Vec3, convention: DomeConvention) -> DomeT
     DomeTable {
         guides,
         marginal_buckets: h as u32 * MARGINAL_GUIDE,
-        texel_offset: 0,
+        texel_offset: None,
         sh: [[0.0; 4]; 9],
         shape,
         nodes,
@@ -430,10 +430,9 @@ impl DomeTable {
             shape: self.shape,
             nodes_width: self.nodes_width,
             marginal_buckets: self.marginal_buckets,
-            texels: if texels == 0 {
-                0
-            } else {
-                texels + 16 * self.texel_offset
+            texels: match self.texel_offset {
+                Some(offset) if texels != 0 => texels + 16 * offset,
+                _ => 0,
             },
             width: self.width,
             height: self.height,

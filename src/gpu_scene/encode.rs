@@ -468,12 +468,17 @@ fn dome_table(
     let (i, convention) = dome_source?;
     let l = &scene.lights[i];
     l.texture.map(|t| {
-        let mut table = dome_sh::table(&scene.textures[t as usize], l, convention);
-        // As encode_textures lays the texels out: one texture after the other.
-        table.texel_offset = scene.textures[..t as usize]
-            .iter()
-            .map(|x| x.texels.len() as u64)
-            .sum();
+        let texture = &scene.textures[t as usize];
+        let mut table = dome_sh::table(texture, l, convention);
+        // As encode_textures lays the texels out: one texture after the other. A Mitsuba
+        // cell's corners are two texel rows, which a one-row map lacks (its lookup clamps).
+        table.texel_offset =
+            (convention != DomeConvention::Mitsuba || texture.height >= 2).then(|| {
+                scene.textures[..t as usize]
+                    .iter()
+                    .map(|x| x.texels.len() as u64)
+                    .sum()
+            });
         table
     })
 }
