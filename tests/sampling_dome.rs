@@ -60,7 +60,7 @@ fn dome_case(
     corners: bool,
 ) {
     let mut table = dome::build(tex, tint, conv);
-    table.texel_offset = Some(0);
+    table.texel_offset = corners.then_some(0);
     let data = g
         .ctx
         .upload_parts(
@@ -87,7 +87,7 @@ fn dome_case(
         DomeConvention::Pbrt => LIGHT_FLAG_DOME_PBRT,
     };
     let mut prm = LightParams {
-        dome: table.gpu(data.address, if corners { texels.address } else { 0 }),
+        dome: table.gpu(data.address, texels.address),
         light: l,
         p: [0.0; 4],
     };

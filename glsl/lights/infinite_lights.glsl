@@ -107,15 +107,23 @@ vec3 dome_corner_radiance(GpuLight l, DomeCorners k, vec2 f) {
     return l.radiance * mix(mix(k.t00, k.t10, f.x), mix(k.t01, k.t11, f.x), f.y);
 }
 
-// The nodes of cell (i, j); false when the density is uniform there. With corners (`read`,
-// Mitsuba's cells), their luminance under the light's colour, as the host's nodes hold it.
-bool dome_cell(GpuLight l, GpuDomeSampling ds, uint i, uint j, bool read, DomeCorners k, out DomeCell c) {
-    c = DomeCell(ds.shape == DOME_SHAPE_CORNERS, vec2(1.0), vec2(1.0), vec3(1.0), vec3(1.0), vec3(1.0));
+// No corners read (dome_reads_corners false): dome_cell takes the nodes.
+DomeCorners no_corners() { return DomeCorners(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0)); }
+
+// Whether cell (i, j)'s density is shaped (the sign bit of its first node); uniform otherwise.
+bool dome_cell_shaped(GpuDomeSampling ds, uint i, uint j) {
     if (!has_feature(FEATURE_DOME_SHAPED) || ds.shape == DOME_SHAPE_UNIFORM) return false;
+    uint k = (j + 1u) * ds.nodes_width + i + 1u;
+    return (floatBitsToUint(DomeCdfRef(ds.nodes).v[k]) & 0x80000000u) != 0u;
+}
+
+// The nodes of shaped cell (i, j). With corners (`read`, Mitsuba's cells), their luminance
+// under the light's colour, as the host's nodes hold it.
+DomeCell dome_cell(GpuLight l, GpuDomeSampling ds, uint i, uint j, bool read, DomeCorners k) {
+    DomeCell c = DomeCell(ds.shape == DOME_SHAPE_CORNERS, vec2(1.0), vec2(1.0), vec3(1.0), vec3(1.0), vec3(1.0));
     DomeCdfRef nodes = DomeCdfRef(ds.nodes);
     uint s = ds.nodes_width;
     int x = int(i), y = int(j);
-    if ((floatBitsToUint(nodes.v[(j + 1u) * s + i + 1u]) & 0x80000000u) == 0u) return false;
     if (c.bilinear && read) {
         vec3 tint = l.radiance;
         c.t = max(vec2(luminance(tint * k.t00), luminance(tint * k.t10)), 0.0);
@@ -137,7 +145,7 @@ bool dome_cell(GpuLight l, GpuDomeSampling ds, uint i, uint j, bool read, DomeCo
         c.r1 = rows[1];
         c.r2 = 0.5 * (rows[1] + rows[2]);
     }
-    return true;
+    return c;
 }
 
 // Integral over [0, 1] of the piecewise linear function with nodes n at 0, 1/2, 1 (times 4).
@@ -236,12 +244,13 @@ float dome_table_pdf(GpuLight l, GpuDomeSampling ds, vec3 w, vec2 uv) {
     float pc = cond.v[base + i + 1u] - cond.v[base + i];
     float jacobian = dome_jacobian(l, w);
     if (!(jacobian > 0.0)) return 0.0;
-    DomeCell c;
-    bool read = dome_reads_corners(l, ds) && ds.shape == DOME_SHAPE_CORNERS;
-    DomeCorners k = read ? dome_corners(ds, i, j) : DomeCorners(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-    float shape = dome_cell(l, ds, i, j, read, k, c)
-        ? dome_shape_density(c, clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0))
-        : 1.0;
+    float shape = 1.0;
+    if (dome_cell_shaped(ds, i, j)) {
+        // The corners only where the shape needs them (a BRDF sample's hit needs no radiance here).
+        bool read = dome_reads_corners(l, ds);
+        DomeCell c = dome_cell(l, ds, i, j, read, read ? dome_corners(ds, i, j) : no_corners());
+        shape = dome_shape_density(c, clamp(vec2(x - float(i), y - float(j)), 0.0, 1.0));
+    }
     return pm * pc * shape * float(W * H) / jacobian;
 }
 
@@ -302,9 +311,8 @@ LightSample sample_dome(GpuLight l, GpuDomeSampling ds, vec3 n, vec2 u) {
     vec2 f = clamp(vec2((uy - c0) / pc, (ux - m0) / pm), 0.0, 1.0);
     // A Mitsuba-convention cell's corners, read once for its shape and the sample's radiance.
     bool read = dome_reads_corners(l, ds);
-    DomeCorners k = read ? dome_corners(ds, i, j) : DomeCorners(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-    DomeCell c;
-    float shape = dome_cell(l, ds, i, j, read, k, c) ? dome_shape_warp(c, f) : 1.0;
+    DomeCorners k = read ? dome_corners(ds, i, j) : no_corners();
+    float shape = dome_cell_shaped(ds, i, j) ? dome_shape_warp(dome_cell(l, ds, i, j, read, k), f) : 1.0;
     if (read) s.le = dome_corner_radiance(l, k, f);
     vec2 uv = vec2((float(i) + f.x) / float(W) + dome_cell_offset(l, W), (float(j) + f.y) / float(H));
     if (uv.x >= 1.0) uv.x -= 1.0;
