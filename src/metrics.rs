@@ -56,45 +56,109 @@ pub fn compare(image: &[[f32; 3]], reference: &[[f32; 3]]) -> ErrorMetrics {
 
 /// Estimated relMSE of `image` (pixel i the mean of `counts[i]` samples) from the mean of its
 /// even-numbered samples `even` (ceil(n/2) of them) and of its odd-numbered ones `odd`
-/// (floor(n/2)).
+/// (floor(n/2)), at the pixels whose samples alternate between two independent sequences
+/// (`split`, crate::film::Split).
 ///
 /// With σ² the per-sample variance, Var(even - odd) = σ² (1/n_e + 1/n_o) and Var(image) = σ²/n,
 /// so (even - odd)² / (n (1/n_e + 1/n_o)) is an unbiased estimate of the pixel's squared error
 /// when the renderer is unbiased. The unknown reference in the relMSE denominator is replaced by
 /// the image itself, which biases the estimate up by about 3·Var(pixel)/pixel² (the curvature of
-/// 1/x²); that bias vanishes as samples accumulate. Pixels of fewer than 2 samples are left out;
-/// None when every pixel has fewer.
+/// 1/x²); that bias vanishes as samples accumulate. Where only some pixels split (witness
+/// blocks, crate::film::Split), the others' error comes from their sample variance `variance`
+/// (s²/n, the error of independent samples, which stratification lowers by a gain that varies
+/// across the image): the split pixels measure that gain, Σ term / Σ s²/n over them, and the
+/// image's estimate is the gain times the mean of s²/n over every pixel (a ratio estimator:
+/// consistent as witnesses accumulate, and far steadier than the witnesses' own mean where the
+/// error gathers in a few places). Each pixel's s²/n is of its own count, so the witnesses'
+/// lower error (twice the samples) is in the estimate. Where every pixel splits, the mean of
+/// their terms. Pixels of fewer than 2 samples are left out; None when every pixel has fewer, or
+/// a pixel that does not split has.
 pub fn estimated_relmse(
     image: &[[f32; 3]],
     even: &[[f32; 3]],
     odd: &[[f32; 3]],
     counts: &[u32],
+    split: &[bool],
+    variance: &[[f32; 3]],
 ) -> Option<f64> {
+    let terms = estimated_relmse_pixels(image, even, odd, counts, split);
+    // A pixel's s²/n relative to its value. At a witness (2N samples, N of each sequence) that of
+    // one sequence's N samples, as every other pixel has it, halved: from the sum of squares
+    // (n mean² + (n - 1) n s²/n) and the halves' means, (Σx²/2 - N (even² + odd²)/2) / (N (N - 1))
+    // has the expectation of s²/N of one sequence (s² of stratified samples is not σ², but it is
+    // the same at every pixel that takes N samples of one sequence).
+    let relative = |i: usize, witness: bool| {
+        let (x, v, n) = (image[i], variance[i], f64::from(counts[i]));
+        (0..3)
+            .map(|c| {
+                let (x, v) = (f64::from(x[c]), f64::from(v[c]));
+                let m = if witness {
+                    let half = (n / 2.0).floor();
+                    let squares = n * x * x + (n - 1.0) * n * v;
+                    let (e, o) = (f64::from(even[i][c]), f64::from(odd[i][c]));
+                    (squares / 2.0 - half * (e * e + o * o) / 2.0).max(0.0)
+                        / (half * (half - 1.0)).max(1.0)
+                        / 2.0
+                } else {
+                    v
+                };
+                m / (x * x + RELMSE_EPSILON)
+            })
+            .sum::<f64>()
+            / 3.0
+    };
+    let witnesses = !split.iter().all(|&s| s);
     let (mut sum, mut count) = (0.0, 0u64);
-    for t in estimated_relmse_pixels(image, even, odd, counts) {
+    let (mut witness_mc, mut all_mc, mut all) = (0.0, 0.0, 0u64);
+    for (i, &t) in terms.iter().enumerate() {
+        let w = witnesses && split[i];
         if !t.is_nan() {
             sum += t;
             count += 1;
+            if witnesses {
+                witness_mc += relative(i, w);
+            }
+        }
+        if witnesses
+            && counts[i] >= if w { 4 } else { 2 }
+            && finite(&image[i])
+            && finite(&variance[i])
+        {
+            all_mc += relative(i, w);
+            all += 1;
         }
     }
-    (count > 0).then(|| sum / count as f64)
+    // At one sample a pixel the other pixels have no s² yet: no estimate, as where every pixel
+    // splits.
+    let unmeasured = (0..counts.len()).any(|i| !split[i] && counts[i] < 2);
+    if count == 0 || unmeasured {
+        return None;
+    }
+    if split.iter().all(|&s| s) || witness_mc.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
+        return Some(sum / count as f64);
+    }
+    Some(sum / witness_mc * all_mc / all.max(1) as f64)
 }
 
-/// Each pixel's term of [`estimated_relmse`] (its channels' mean), NaN for a pixel left out:
-/// what two renders of the same pixels are compared by, pixel against pixel.
+/// Each split pixel's term of [`estimated_relmse`] (its channels' mean), NaN for a pixel left out
+/// (not split, or fewer than 2 samples): what two renders of the same pixels are compared by,
+/// pixel against pixel.
 pub fn estimated_relmse_pixels(
     image: &[[f32; 3]],
     even: &[[f32; 3]],
     odd: &[[f32; 3]],
     counts: &[u32],
+    split: &[bool],
 ) -> Vec<f64> {
     image
         .iter()
         .zip(even)
         .zip(odd)
         .zip(counts)
-        .map(|(((i, e), o), &n)| {
-            if n < 2 || !(finite(i) && finite(e) && finite(o)) {
+        .zip(split)
+        .map(|((((i, e), o), &n), &s)| {
+            if !s || n < 2 || !(finite(i) && finite(e) && finite(o)) {
                 return f64::NAN;
             }
             let ne = f64::from(n.div_ceil(2));
@@ -187,7 +251,9 @@ mod tests {
             .sum::<f64>()
             / pixels as f64;
         let counts = vec![n; pixels];
-        let est = estimated_relmse(&img, &even, &odd, &counts).unwrap();
+        let split = vec![true; pixels];
+        let variance = vec![[0.0f32; 3]; pixels];
+        let est = estimated_relmse(&img, &even, &odd, &counts, &split, &variance).unwrap();
         let tol = 5.0 * (2.0 / pixels as f64).sqrt() * expected;
         assert!(
             (est - expected).abs() < tol,
@@ -201,6 +267,10 @@ mod tests {
             (est / truth - 1.0 - bias).abs() < 0.05,
             "estimate {est}, true {truth}"
         );
-        assert_eq!(estimated_relmse(&img, &even, &odd, &vec![1; pixels]), None);
+        let one = vec![1; pixels];
+        assert_eq!(
+            estimated_relmse(&img, &even, &odd, &one, &split, &variance),
+            None
+        );
     }
 }

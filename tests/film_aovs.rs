@@ -73,6 +73,7 @@ fn info(range: (u32, u32), aov_planes: &[String]) -> PartInfo {
         frame: (W, H),
         spp: SPP,
         seed: 3,
+        witness: film::Split::ALL.word(),
         scene_hash: "0123456789abcdef".into(),
         settings: "integrator=test".into(),
         trace: "bvh".into(),
@@ -105,7 +106,7 @@ fn aov_planes_split_and_merged_are_bit_identical_and_reach_the_exr() {
     let one = job_sums((0, SPP), &names);
     assert_eq!(one.channels(), FILM_CHANNELS + 2 * AOV_CHANNELS);
     assert!(one.boundary.is_empty());
-    let whole = film::resolve(&one.sums, &names, W, H, SPP).film;
+    let whole = film::resolve(&one.sums, &names, (W, H), SPP, film::Split::ALL, (0, 0)).film;
     // Two jobs split inside block 256..512, which both keep whole.
     let parts = vec![
         part("aov-a", (0, 300), &names),

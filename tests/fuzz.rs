@@ -259,6 +259,7 @@ fn partial_exr_never_panics() {
         frame: (6, 5),
         spp: 512,
         seed: 3,
+        witness: illum::film::Split::of_image(1024, 1024, 3).word(),
         scene_hash: "00ff".into(),
         settings: "integrator=full".into(),
         trace: "bvh".into(),

@@ -1,8 +1,9 @@
 //! The camera-sample streams (glsl/shared/common.glsl `rng_init_camera`, through
 //! tests/kernels/rng_check.comp): shuffled, Owen-scrambled Sobol pairs. Their structure is checked
-//! exactly (the first 2^17 even, or odd, samples of a pixel put one point of every pair in each
-//! elementary interval of area 2^-17, and every prefix floor(n/2^m) or one more point in each of
-//! area 2^-m), and their randomization by chi-square tests over many
+//! exactly (the first 2^17 even, or odd, samples of a split pixel, and the first 2^17 samples of
+//! a pixel of one sequence, put one point of every pair in each elementary interval of area
+//! 2^-17, and every prefix floor(n/2^m) or one more point in each of area 2^-m), and their
+//! randomization by chi-square tests over many
 //! pixels: each point uniform, and pairs of one sample, and the even and the odd sequence,
 //! independent of each other.
 
@@ -47,11 +48,27 @@ fn camera_streams_are_scrambled_sobol_nets() {
     const M: u32 = 17;
     for (seed, pixel) in [(7u32, 12345u32), (0xdead_beef, 3)] {
         for pair in [0u32, 5] {
-            for parity in [0u32, 1] {
+            // Parity 0 and 1: a split pixel's even and odd samples; 2: a pixel of one sequence
+            // (bit 31 of the kernel's word), sample j, which must be the split pixel's sample 2j.
+            for parity in [0u32, 1, 2] {
                 let inputs: Vec<[u32; 4]> = (0..1u32 << M)
-                    .map(|j| [seed, pixel, 2 * j + parity, pair])
+                    .map(|j| match parity {
+                        2 => [seed, pixel, j, pair | 1 << 31],
+                        _ => [seed, pixel, 2 * j + parity, pair],
+                    })
                     .collect();
                 let out = draw(&k, &inputs);
+                if parity == 2 {
+                    let even: Vec<[u32; 4]> = (0..1u32 << 10)
+                        .map(|j| [seed, pixel, 2 * j, pair])
+                        .collect();
+                    assert_eq!(
+                        draw(&k, &even),
+                        out[..1 << 10],
+                        "seed {seed} pixel {pixel} pair {pair}: one sequence is not a split \
+                         pixel's even samples"
+                    );
+                }
                 // Every shape of elementary interval: 2^a columns by 2^(M - a) rows.
                 for a in 0..=M {
                     let (cols, rows) = (1u32 << a, 1u32 << (M - a));

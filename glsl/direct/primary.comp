@@ -21,12 +21,12 @@ void main() {
     uint slot = film_slot(pix);
     FilmPixel acc = film_load(pc, slot);
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
-    uint samples = film_sample_count(pc, pixel);
+    FilmSamples fs = film_samples(pc, pix, pixel);
     PROF_START();
-    for (uint k = 0u; k < samples; ++k) {
-        uint sample_index = pc.first_sample + k;
+    for (uint k = 0u; k < fs.count; ++k) {
+        uint sample_index = fs.first + k;
         Rng rng;
-        vec3 d = film_camera_ray(pc, pix, pixel, sample_index, rng);
+        vec3 d = film_camera_ray(pc, pix, pixel, sample_index, fs.split, rng);
         vec3 o = frame.cam_origin.xyz;
         PROF(PROF_CAMERA_RAY);
         Hit h = trace_closest(o, d, 0.0, INF, MASK_GEOMETRY | MASK_LIGHTS);
@@ -42,7 +42,7 @@ void main() {
             beauty += film_clamp(direct_lighting(sh, m, rng, rays), acc);
         }
         beauty += le;
-        film_add(acc, sample_index, beauty, le);
+        film_add(acc, sample_index, fs.split, beauty, le);
         PROF(PROF_FILM);
     }
     acc.beauty_sq.w += float(rays);

@@ -72,16 +72,30 @@ uint film_sample_count(PassConstants p, uint pixel) {
     return end <= p.first_sample ? 0u : min(p.sample_count, end - p.first_sample);
 }
 
+// Pixel pix's samples in pass p, in its own index space: [first, first + count), two camera
+// sequences alternating where `split` (Frame.witness). With a witness period M > 1 a witness
+// pixel takes both sequences' sample s of the pass (indices 2s and 2s + 1), the others the first
+// sequence's alone: whole 8 x 8 blocks (a workgroup), so no SIMD group mixes the two.
+struct FilmSamples { uint first; uint count; bool split; };
+FilmSamples film_samples(PassConstants p, uvec2 pix, uint pixel) {
+    uint n = film_sample_count(p, pixel);
+    uint period = frame.witness & 0xffffu;
+    if (period <= 1u) return FilmSamples(p.first_sample, n, true);
+    uvec2 b = pix >> 3u;
+    if ((b.x + 5u * b.y + (frame.witness >> 16u)) % period != 0u) return FilmSamples(p.first_sample, n, false);
+    return FilmSamples(2u * p.first_sample, 2u * n, true);
+}
+
 // Direction of the camera ray through film position film_uv in [0,1]^2.
 vec3 camera_direction(vec2 film_uv) {
     vec2 ndc = 2.0 * film_uv - 1.0;
     return normalize(frame.cam_forward.xyz + ndc.x * frame.cam_right.xyz - ndc.y * frame.cam_up.xyz);
 }
 
-// Sample `sample_index` of pixel pix in pass p: its random numbers and its camera ray's direction d (from
-// frame.cam_origin).
-vec3 film_camera_ray(PassConstants p, uvec2 pix, uint pixel, uint sample_index, out Rng rng) {
-    rng = rng_init_camera(p.seed_lo, p.seed_hi, pixel, sample_index);
+// Sample `sample_index` of pixel pix in pass p (of its FilmSamples): its random numbers and its
+// camera ray's direction d (from frame.cam_origin).
+vec3 film_camera_ray(PassConstants p, uvec2 pix, uint pixel, uint sample_index, bool split, out Rng rng) {
+    rng = rng_init_camera(p.seed_lo, p.seed_hi, pixel, sample_index, split);
     vec2 film_uv = (vec2(pix) + rng_next2(rng)) / vec2(frame.width, frame.height);
     return camera_direction(film_uv);
 }
@@ -134,7 +148,7 @@ vec3 film_clamp(vec3 direct, inout FilmPixel acc) {
 // Adds sample_index `sample_index`'s beauty and directly seen emission le to acc. The one place where
 // non-finite sample_index values are counted, before anything accumulates them: such a sample_index counts as
 // 0 (beauty, emission and the caller's AOVs, which it skips when this returns false).
-bool film_add(inout FilmPixel acc, uint sample_index, vec3 beauty, vec3 le) {
+bool film_add(inout FilmPixel acc, uint sample_index, bool split, vec3 beauty, vec3 le) {
     // Test hook (RenderSettings::inject_non_finite): every n-th sample_index of each pixel is NaN, so
     // that tests can check this accounting end to end.
     acc.beauty_odd.w += 1.0;
@@ -148,7 +162,7 @@ bool film_add(inout FilmPixel acc, uint sample_index, vec3 beauty, vec3 le) {
     acc.emission.rgb += le;
     acc.beauty.rgb += beauty;
     acc.beauty_sq.rgb += beauty * beauty;
-    if ((sample_index & 1u) == 1u) acc.beauty_odd.rgb += beauty;
+    if (split && (sample_index & 1u) == 1u) acc.beauty_odd.rgb += beauty;
     return finite;
 }
 

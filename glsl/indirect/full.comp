@@ -139,7 +139,7 @@ struct FullPath {
 
 // Sample `sample_index`'s camera ray (update: through a random point of the path's block, from a
 // random stream apart from the camera samples', another seed word) and its path's start.
-FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, out Rng rng) {
+FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, bool split, out Rng rng) {
     FullPath p;
     if (update) {
         uvec3 id = update_id();
@@ -149,7 +149,7 @@ FullPath full_camera_ray(bool update, FullPixel px, uint sample_index, out Rng r
         vec2 film_uv = min(vec2(id.xy * block) + rng_next2(rng) * float(block), size * (1.0 - 1e-6)) / size;
         p.d = camera_direction(film_uv);
     } else {
-        p.d = film_camera_ray(pc.film, px.pix, px.pixel, sample_index, rng);
+        p.d = film_camera_ray(pc.film, px.pix, px.pixel, sample_index, split, rng);
     }
     p.o = frame.cam_origin.xyz;
     p.mask = MASK_GEOMETRY | MASK_LIGHTS;
@@ -317,10 +317,10 @@ bool full_bounce(bool update, Bounce b, inout FullPath p) {
 }
 
 // Film: the sample's beauty and AOV planes.
-void full_add_sample(inout FullPixel px, uint sample_index, FullPath p) {
+void full_add_sample(inout FullPixel px, uint sample_index, bool split, FullPath p) {
     vec3 le = p.le, direct = p.direct, indirect = p.indirect, reflected = p.sum_s;
     vec3 beauty = le + direct + indirect + reflected;
-    if (!film_add(px.acc, sample_index, beauty, le)) le = direct = indirect = reflected = vec3(0.0);
+    if (!film_add(px.acc, sample_index, split, beauty, le)) le = direct = indirect = reflected = vec3(0.0);
     px.a_direct.rgb += le + direct;
     px.a_indirect.rgb += indirect;
     px.a_reflection.rgb += reflected;
@@ -332,11 +332,11 @@ void main() {
     if (!full_begin(update, px)) return;
     bool cache = radiosity_cache_on();
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
-    uint count = update ? 1u : film_sample_count(pc.film, px.pixel);
-    for (uint k = 0u; k < count; ++k) {
-        uint sample_index = pc.film.first_sample + k;
+    FilmSamples fs = update ? FilmSamples(pc.film.first_sample, 1u, true) : film_samples(pc.film, px.pix, px.pixel);
+    for (uint k = 0u; k < fs.count; ++k) {
+        uint sample_index = fs.first + k;
         Rng rng;
-        FullPath p = full_camera_ray(update, px, sample_index, rng);
+        FullPath p = full_camera_ray(update, px, sample_index, fs.split, rng);
         GpuMaterial m;     // the hit's material
         GpuMaterial m_s;   // the path vertex's
         for (;;) {
@@ -417,7 +417,7 @@ void main() {
             p.o = p.ray == RAY_VERTEX ? p.sh_s.origin : p.sh.origin;
         }
         if (update) break;
-        full_add_sample(px, sample_index, p);
+        full_add_sample(px, sample_index, fs.split, p);
     }
     if (update) return;
     px.acc.beauty_sq.w += float(rays);

@@ -37,7 +37,7 @@ void main() {
     vec4 a_reflection = aov_load(pc, slot, AOV_PLANES, AOV_REFLECTION);
     uint max_depth = frame.max_depth;
     uint rays = 0u;   // traced by this invocation (the rays-per-second figures)
-    uint samples = film_sample_count(pc, pixel);
+    FilmSamples fs = film_samples(pc, pix, pixel);
     // One loop over the vertices of all the pixel's samples: where a path ends, the next sample
     // starts in the same iteration order (path regeneration, Novák et al. 2010), so that the
     // lanes of a SIMD group wait for the longest sum of path lengths, not for the longest path
@@ -55,10 +55,10 @@ void main() {
     Shading sh;
     uint mask;
     PROF_START();
-    while (k < samples) {
+    while (k < fs.count) {
         if (depth == 0u) {
-            sample_index = pc.first_sample + k;
-            d = film_camera_ray(pc, pix, pixel, sample_index, rng);
+            sample_index = fs.first + k;
+            d = film_camera_ray(pc, pix, pixel, sample_index, fs.split, rng);
             o = frame.cam_origin.xyz;
             le = direct = rest = vec3(0.0);
             thr = vec3(1.0);
@@ -116,7 +116,7 @@ void main() {
         }
         // Sample k is complete.
         vec3 beauty = le + direct + rest;
-        if (!film_add(acc, sample_index, beauty, le)) le = direct = rest = vec3(0.0);
+        if (!film_add(acc, sample_index, fs.split, beauty, le)) le = direct = rest = vec3(0.0);
         a_direct.rgb += le + direct;
         if (first_diffuse) a_indirect.rgb += rest; else a_reflection.rgb += rest;
         k += 1u;

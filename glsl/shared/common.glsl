@@ -12,9 +12,9 @@ const float INF = 1.0 / 0.0;
 // * camera samples (rng_init_camera): draw k takes dimension pair k of a shuffled, Owen-scrambled
 //   Sobol (0,2)-sequence over the pixel's sample indices, scrambled per (seed, pixel, k) (Burley
 //   2020, "Practical Hash-based Owen Scrambling"; padded pairs, as pbrt-v4's PaddedSobolSampler).
-//   Every point is uniform, so every estimator stays unbiased; over a pixel's first 2^m even (or
-//   odd) samples each pair is stratified in every elementary interval. A single draw takes a pair
-//   of its own.
+//   Every point is uniform, so every estimator stays unbiased; over a pixel's first 2^m samples
+//   (of a split pixel: its first 2^m even, or odd, ones) each pair is stratified in every
+//   elementary interval. A single draw takes a pair of its own.
 // * everything else (rng_init: cache-update paths, test kernels): PCG, independent draws.
 uint hash_u32(uint x) {  // lowbias32 (Wellons)
     x ^= x >> 16; x *= 0x7feb352du; x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16;
@@ -28,13 +28,15 @@ Rng rng_init(uint seed_lo, uint seed_hi, uint pixel, uint sample_index) {
     h = hash_u32(h ^ (sample_index * 0x85ebca6bu + 0x68e31da4u));
     return Rng(h, 0u, RNG_PCG);
 }
-Rng rng_init_camera(uint seed_lo, uint seed_hi, uint pixel, uint sample_index) {
+Rng rng_init_camera(uint seed_lo, uint seed_hi, uint pixel, uint sample_index, bool split) {
     uint h = hash_u32(seed_lo ^ hash_u32(seed_hi + 0x7f4a7c15u));
-    // Even and odd samples are two sequences with scrambles of their own: independent, so the
-    // even/odd half-buffers still estimate the error (one sequence's halves would be
-    // anti-correlated, and the estimate too high).
-    h = hash_u32(hash_u32(h ^ pixel) ^ (sample_index & 1u) * 0x2545f491u);
-    return Rng(h, sample_index >> 1u, 0u);
+    // Split: even and odd samples are two sequences with scrambles of their own, independent, so
+    // that the even/odd half-buffers estimate the error (one sequence's halves would be
+    // anti-correlated, and the estimate too high). Else one sequence, stratified over all of the
+    // pixel's samples: the first sequence of a split pixel.
+    uint parity = split ? sample_index & 1u : 0u;
+    h = hash_u32(hash_u32(h ^ pixel) ^ parity * 0x2545f491u);
+    return Rng(h, split ? sample_index >> 1u : sample_index, 0u);
 }
 // Laine-Karras hash with Burley 2020's constants: an Owen scramble of x's bits when x holds the
 // digits in reverse (least significant bit = first binary digit), each bit changed only by

@@ -291,7 +291,12 @@ struct Frame {
     uint film_width;
     uint light_floor;         // fewest samples a looped light takes (light_count_for; 0 or 1: the
                               // course's rule alone)
-    uint frame_pad0;          // std430 sizes structs with a vec4 in 16-byte steps
+    uint witness;             // which pixels split their samples into two sequences (the
+                              // half-buffers; film_split, src/film/split.rs): bits 0-15 the period
+                              // M of witness blocks (8 x 8 pixels), bits 16-31 their offset. M 1:
+                              // every pixel, its samples alternating; else a pixel of block (bx, by)
+                              // with (bx + 5 by + offset) % M == 0 takes twice the samples, one
+                              // sequence each, and the others one sequence
     uint64_t profile;         // uint64 per PROFILE_REGIONS region per film slot: time by region
                               // in kernels built with ILLUM_PROFILE (shared/profile.glsl; 0: none)
 };

@@ -446,7 +446,7 @@ fn summary(
         .map_or(scene.camera.height, |b| b.rows_done(scene.camera.height));
     let spp = if rows < scene.camera.height {
         format!("{} in the first {rows} rows (interrupted)", s.spp)
-    } else if s.camera_samples == pixels as u64 * u64::from(s.spp) {
+    } else if s.camera_samples == pixels as u64 * u64::from(s.spp) + s.witness_samples {
         s.spp.to_string()
     } else {
         format!("{:.1} (adaptive, at most {})", samples / pixels, s.spp)

@@ -25,9 +25,11 @@ use crate::layout::{self, FilmPixel};
 mod device;
 mod image;
 pub mod memory;
+pub mod split;
 
 pub use device::{DeviceFilm, clear, commit_block, download_window};
 pub use image::{AovPlane, FILM_LAYERS, Film};
+pub use split::Split;
 
 /// Samples per block of the film grid (and the most one invocation takes per dispatch).
 pub const FILM_BLOCK: u32 = 256;
@@ -321,10 +323,15 @@ pub(crate) fn worker_threads(pixels: usize) -> usize {
 pub struct Resolved {
     pub film: Film,
     pub spp: u32,
-    /// Means of the even- and odd-numbered samples (the half-buffers).
+    /// Means of the even- and odd-numbered samples (the half-buffers) where `split`, else the
+    /// pixel's mean.
     pub even: Vec<[f32; 3]>,
     pub odd: Vec<[f32; 3]>,
-    /// Samples each pixel took: `spp`, or fewer where adaptive sampling stopped it.
+    /// Whether each pixel's samples alternate between two sequences ([`Split`]): where its
+    /// half-buffers estimate the error.
+    pub split: Vec<bool>,
+    /// Samples each pixel took: `spp` (twice that at a witness pixel, [`Split`]), or fewer where
+    /// adaptive sampling stopped it.
     pub counts: Vec<u32>,
     pub non_finite_samples: u64,
     /// Camera samples whose direct lighting the firefly clamp reduced.
@@ -337,14 +344,16 @@ pub struct Resolved {
 /// as 0, as denoisers expect; `spp`, or fewer where adaptive sampling stopped the pixel); Z over
 /// the samples that hit (+inf where none did); Variance is the variance of the pixel mean,
 /// s² / n; each AOV plane is averaged over all samples too. The film gets its SampleCount plane
-/// where the pixels' counts are not all `spp`. `sums` are the
-/// window's pixels, `width` x `height`, with the planes `aov_planes` after FilmPixel's channels.
+/// where a pixel's count is not what `split` gives it for `spp`. `sums` are the window's pixels,
+/// `width` x `height` at `origin` in the image, with the planes `aov_planes` after FilmPixel's
+/// channels.
 pub fn resolve(
     sums: &[i128],
     aov_planes: &[String],
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     spp: u32,
+    split: Split,
+    origin: (u32, u32),
 ) -> Resolved {
     let mut film = Film::new(width, height);
     let channels = channels(aov_planes.len());
@@ -359,6 +368,7 @@ pub fn resolve(
     let mut variance = vec![[0.0f32; 3]; film.pixel_count()];
     let mut even = vec![[0.0f32; 3]; film.pixel_count()];
     let mut odd = vec![[0.0f32; 3]; film.pixel_count()];
+    let splits = split.window(origin.0, origin.1, width, height);
     let (mut non_finite, mut clamped, mut rays) = (0u64, 0u64, 0u64);
     // Offsets of the FilmPixel members in the flattened sums.
     const BEAUTY: usize = FilmPixel::BEAUTY;
@@ -392,9 +402,14 @@ pub fn resolve(
                 let m2 = p[BEAUTY_SQ + c] / n;
                 let sample_var = (m2 - mean * mean).max(0.0) * n / (n - 1.0);
                 variance[i][c] = (sample_var / n) as f32;
-                let o = p[BEAUTY_ODD + c];
-                even[i][c] = ((sum - o) / n_even) as f32;
-                odd[i][c] = (o / n_odd) as f32;
+                if splits[i] {
+                    let o = p[BEAUTY_ODD + c];
+                    even[i][c] = ((sum - o) / n_even) as f32;
+                    odd[i][c] = (o / n_odd) as f32;
+                } else {
+                    even[i][c] = mean as f32;
+                    odd[i][c] = mean as f32;
+                }
             }
         }
         let hits = p[ALBEDO + 3];
@@ -408,7 +423,12 @@ pub fn resolve(
         rays += p[BEAUTY_SQ + 3] as u64;
     }
     film.variance = Some(variance);
-    if counts.iter().any(|&c| c != spp) {
+    let w = width as usize;
+    let expected = |i: usize| {
+        let (x, y) = ((i % w) as u32, (i / w) as u32);
+        split.samples(origin.0 + x, origin.1 + y, spp)
+    };
+    if counts.iter().enumerate().any(|(i, &c)| c != expected(i)) {
         film.samples = Some(counts.iter().map(|&c| c as f32).collect());
     }
     Resolved {
@@ -416,6 +436,7 @@ pub fn resolve(
         spp,
         even,
         odd,
+        split: splits,
         counts,
         non_finite_samples: non_finite,
         clamped_samples: clamped,

@@ -103,6 +103,13 @@ pub fn part_info(
         frame: (scene.camera.width, scene.camera.height),
         spp: job.total_spp,
         seed: settings.seed,
+        witness: film::Split::of_render(
+            scene.camera.width,
+            scene.camera.height,
+            settings.seed,
+            settings.adaptive.is_some(),
+        )
+        .word(),
         scene_hash: scene_hash(scene),
         settings: settings_text(settings),
         trace: out.stats.trace.to_string(),
@@ -157,13 +164,18 @@ pub fn check(parts: &[PartHeader]) -> Result<()> {
     let f = &first.info;
     for p in &parts[1..] {
         let i = &p.info;
-        let checks: [(&str, String, String); 8] = [
+        let checks: [(&str, String, String); 9] = [
             (
                 "illum.sceneHash",
                 i.scene_hash.clone(),
                 f.scene_hash.clone(),
             ),
             ("illum.seed", i.seed.to_string(), f.seed.to_string()),
+            (
+                "illum.witness",
+                i.witness.to_string(),
+                f.witness.to_string(),
+            ),
             ("illum.spp", i.spp.to_string(), f.spp.to_string()),
             (
                 "illum.frame",
@@ -416,7 +428,14 @@ impl Accumulator {
 
     fn finish(self, headers: &[PartHeader]) -> Merged {
         let f = &headers[0].info;
-        let r = film::resolve(&self.sums, &self.aov_planes, self.width, self.height, f.spp);
+        let r = film::resolve(
+            &self.sums,
+            &self.aov_planes,
+            (self.width, self.height),
+            f.spp,
+            film::Split::from_word(f.witness),
+            (0, 0),
+        );
         let mut devices: Vec<String> = headers.iter().map(|p| p.info.device.clone()).collect();
         devices.sort();
         devices.dedup();

@@ -11,6 +11,7 @@
 //!
 //! Header attributes (text): `illum.partial` = "1", `illum.samples` = "A..B", `illum.crop` =
 //! "x0,y0,x1,y1", `illum.frame` = "WxH", `illum.spp` (of the whole image), `illum.seed`,
+//! `illum.witness` (which pixels split their samples: film::Split's word; absent: every one),
 //! `illum.sceneHash`, `illum.settings`, `illum.trace`, `illum.version`, `illum.device`,
 //! `illum.renderSeconds`, `illum.setupSeconds`, and `illum.aovPlanes` = the AOV planes' names,
 //! comma-separated, in channel order (absent when the integrator declares none).
@@ -51,6 +52,8 @@ pub struct PartInfo {
     pub frame: (u32, u32),
     pub spp: u32,
     pub seed: u64,
+    /// Which pixels split their samples into the half-buffers (film::Split::word).
+    pub witness: u32,
     /// Hash of the validated scene (src/scene: `Scene::content_hash`), hex.
     pub scene_hash: String,
     /// Every setting that changes the samples (integrator, clamp), as text.
@@ -137,6 +140,7 @@ pub fn write_partial(
     put("illum.frame", format!("{}x{}", info.frame.0, info.frame.1));
     put("illum.spp", info.spp.to_string());
     put("illum.seed", info.seed.to_string());
+    put("illum.witness", info.witness.to_string());
     put("illum.sceneHash", info.scene_hash.clone());
     put("illum.settings", info.settings.clone());
     put("illum.trace", info.trace.clone());
@@ -227,6 +231,10 @@ fn parse_info(path: &Path, attributes: &LayerAttributes, size: Vec2<usize>) -> R
         seed: attr("illum.seed")?
             .parse()
             .map_err(|_| bad("illum.seed is not a number".into()))?,
+        witness: match attributes.other.get(&Text::from("illum.witness")) {
+            Some(_) => num("illum.witness")? as u32,
+            None => film::Split::ALL.word(),
+        },
         scene_hash: attr("illum.sceneHash")?,
         settings: attr("illum.settings")?,
         trace: attr("illum.trace")?,

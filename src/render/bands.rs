@@ -142,6 +142,7 @@ impl Renderer {
                 stats.commit_seconds += b.commit_seconds;
                 stats.submissions += b.submissions;
                 stats.camera_samples += b.camera_samples;
+                stats.witness_samples += b.witness_samples;
                 stats.non_finite_samples += b.non_finite_samples;
                 stats.clamped_samples += b.clamped_samples;
                 stats.rays += b.rays;

@@ -223,9 +223,10 @@ impl Blocking<'_> {
             _ => film::resolve(
                 &p.sums.all_sums(),
                 &p.planes,
-                self.window.width(),
-                self.window.height(),
+                (self.window.width(), self.window.height()),
                 p.done,
+                self.setup.split,
+                (self.window.x0, self.window.y0),
             ),
         };
         if !p.evaluate
@@ -324,7 +325,14 @@ impl Blocking<'_> {
         let channels = film::channels(planes.len());
         let mut sums = vec![0i128; block.len()];
         film::add_block(&mut sums, &block, channels);
-        let r = film::resolve(&sums, planes, ring.width(), ring.height(), t.min_spp);
+        let r = film::resolve(
+            &sums,
+            planes,
+            (ring.width(), ring.height()),
+            t.min_spp,
+            film::Split::ALL,
+            (ring.x0, ring.y0),
+        );
         // Each pixel's rays a sample: the cost of its samples.
         let rays = crate::layout::FilmPixel::BEAUTY_SQ + 3;
         let costs: Vec<f64> = sums
@@ -476,9 +484,10 @@ impl Blocking<'_> {
         let r = film::resolve(
             &peek,
             &p.planes,
-            self.window.width(),
-            self.window.height(),
+            (self.window.width(), self.window.height()),
             p.done,
+            self.setup.split,
+            (self.window.x0, self.window.y0),
         );
         evaluate_pass(&mut report, &r, self.settings.reference.as_deref());
         p.passes.push(report);
@@ -510,6 +519,14 @@ pub fn evaluate_pass(
 ) {
     use crate::metrics;
     report.non_finite_samples = r.non_finite_samples;
-    report.estimated_relmse = metrics::estimated_relmse(&r.film.beauty, &r.even, &r.odd, &r.counts);
+    let variance = r.film.variance.as_deref().unwrap_or(&[]);
+    report.estimated_relmse = metrics::estimated_relmse(
+        &r.film.beauty,
+        &r.even,
+        &r.odd,
+        &r.counts,
+        &r.split,
+        variance,
+    );
     report.error = reference.map(|reference| metrics::compare(&r.film.beauty, reference));
 }

@@ -96,6 +96,8 @@ pub struct Setup {
     pub aov_planes: &'static [&'static str],
     /// The pixels the device film covers (Frame.film_x0, film_y0, film_width).
     pub film_window: Window,
+    /// Which pixels split their samples into the half-buffers (Frame.witness).
+    pub split: film::Split,
 }
 
 impl Setup {
@@ -124,6 +126,7 @@ impl Setup {
             frame: Frame::default(),
             aov_planes,
             film_window,
+            split: film::Split::ALL,
         };
         setup.configure(ctx, prepared, camera, settings, schedule)?;
         Ok(setup)
@@ -149,6 +152,15 @@ impl Setup {
         f.nan_every = settings.inject_non_finite;
         let w = self.film_window;
         (f.film_x0, f.film_y0, f.film_width) = (w.x0, w.y0, w.width());
+        // Witness blocks in a blocking render of fixed counts; a host's passes (a session) and
+        // adaptive sampling (its counts set per pixel from the half-buffers) split every pixel.
+        self.split = if schedule == Schedule::Fixed {
+            film::Split::ALL
+        } else {
+            let adaptive = settings.adaptive.is_some();
+            film::Split::of_render(camera.width, camera.height, settings.seed, adaptive)
+        };
+        f.witness = self.split.word();
         self.kernels
             .configure(ctx, prepared, &mut f, &*self.integrator, schedule)?;
         self.frame = f;

@@ -79,6 +79,9 @@ pub struct RenderStats {
     /// Camera samples of the image, over all its pixels (with adaptive sampling fewer than
     /// pixels x spp; its pilot's are not counted, its time is in `render_seconds`).
     pub camera_samples: u64,
+    /// Of `camera_samples`, those the witness blocks took beyond the render's spp (film::Split:
+    /// their pixels take both sequences' samples).
+    pub witness_samples: u64,
     /// Camera samples whose beauty was NaN or infinite (counted, then replaced by 0).
     pub non_finite_samples: u64,
     /// Rays traced: camera rays and shadow rays.
@@ -117,6 +120,16 @@ impl RenderStats {
             submissions: o.submissions,
             spp: o.done,
             camera_samples: r.counts.iter().map(|&c| u64::from(c)).sum(),
+            witness_samples: if setup.split.witnesses() {
+                r.counts
+                    .iter()
+                    .zip(&r.split)
+                    .filter(|(_, s)| **s)
+                    .map(|(&c, _)| u64::from(c / 2))
+                    .sum()
+            } else {
+                0
+            },
             non_finite_samples: r.non_finite_samples,
             rays: r.rays,
             trace: prepared.trace.name(),

@@ -29,6 +29,8 @@ pub struct Peek<'a> {
     pub block: Option<Vec<f32>>,
     /// Samples per pixel they hold.
     pub spp: u32,
+    /// Which pixels of the window split their samples into the half-buffers (film::Split).
+    pub split: Vec<bool>,
 }
 
 impl Peek<'_> {
@@ -132,10 +134,13 @@ impl Progressive<'_> {
 
     /// The sums so far, for display (reads the block in progress back from the device).
     pub fn peek(&self) -> Result<Peek<'_>> {
+        let b = self.blocking();
+        let w = b.window;
         Ok(Peek {
             sums: self.progress.sums(),
-            block: self.blocking().block_in_progress(&self.progress)?,
+            block: b.block_in_progress(&self.progress)?,
             spp: self.done(),
+            split: b.setup.split.window(w.x0, w.y0, w.width(), w.height()),
         })
     }
 

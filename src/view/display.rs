@@ -150,7 +150,7 @@ pub fn film(peek: &Peek, width: u32, height: u32) -> crate::film::Film {
 /// below 2 samples.
 pub fn estimate(peek: &Peek, pixels: usize) -> Option<f64> {
     let (mut beauty, mut even, mut odd) = (Vec::new(), Vec::new(), Vec::new());
-    let mut counts = Vec::with_capacity(pixels);
+    let (mut counts, mut variance) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
     for i in 0..pixels {
         let n = peek.channel(i, FilmPixel::BEAUTY_ODD + 3) as u32;
         let (n_all, n_even, n_odd) = (
@@ -160,12 +160,21 @@ pub fn estimate(peek: &Peek, pixels: usize) -> Option<f64> {
         );
         let sum: [f64; 3] = std::array::from_fn(|c| peek.channel(i, FilmPixel::BEAUTY + c));
         let o: [f64; 3] = std::array::from_fn(|c| peek.channel(i, FilmPixel::BEAUTY_ODD + c));
+        // s² / n, as film::resolve gives it.
+        variance.push(std::array::from_fn(|c| {
+            let (mean, m2) = (
+                sum[c] / n_all,
+                peek.channel(i, FilmPixel::BEAUTY_SQ + c) / n_all,
+            );
+            ((m2 - mean * mean).max(0.0) / (n_all - 1.0).max(1.0)) as f32
+        }));
         beauty.push(sum.map(|s| (s / n_all) as f32));
         even.push(std::array::from_fn(|c| ((sum[c] - o[c]) / n_even) as f32));
         odd.push(o.map(|v| (v / n_odd) as f32));
         counts.push(n);
     }
-    crate::metrics::estimated_relmse(&beauty, &even, &odd, &counts)
+    let split = &peek.split[..pixels];
+    crate::metrics::estimated_relmse(&beauty, &even, &odd, &counts, split, &variance)
 }
 
 /// The plane as 8-bit sRGB, radiance scaled by 2^`exposure` first.

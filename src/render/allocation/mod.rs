@@ -438,8 +438,13 @@ impl Renderer {
                 .blocking(ctx, s)
                 .render_seed(PILOT_SEED, &mut |_, _| {})?;
             let r = &o.resolved;
-            let pixels =
-                crate::metrics::estimated_relmse_pixels(&r.film.beauty, &r.even, &r.odd, &r.counts);
+            let pixels = crate::metrics::estimated_relmse_pixels(
+                &r.film.beauty,
+                &r.even,
+                &r.odd,
+                &r.counts,
+                &r.split,
+            );
             let samples: u64 = r.counts.iter().map(|&c| u64::from(c)).sum();
             let seen = pixels.iter().any(|t| *t > 0.0 && t.is_finite());
             Ok((seen && samples > 0 && !o.interrupted).then(|| Measured {
