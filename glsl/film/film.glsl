@@ -75,14 +75,14 @@ uint film_sample_count(PassConstants p, uint pixel) {
 // Pixel pix's samples in pass p, in its own index space: [first, first + count), two camera
 // sequences alternating where `split` (Frame.witness). With a witness period M > 1 a witness
 // pixel takes both sequences' sample s of the pass (indices 2s and 2s + 1), the others the first
-// sequence's alone: whole 8 x 8 blocks (a workgroup), so no SIMD group mixes the two.
+// sequence's alone: whole workgroups, so no SIMD group mixes the two (src/film/split.rs).
 struct FilmSamples { uint first; uint count; bool split; };
 FilmSamples film_samples(PassConstants p, uvec2 pix, uint pixel) {
     uint n = film_sample_count(p, pixel);
     uint period = frame.witness & 0xffffu;
     if (period <= 1u) return FilmSamples(p.first_sample, n, true);
-    uvec2 b = pix >> 3u;
-    if ((b.x + 5u * b.y + (frame.witness >> 16u)) % period != 0u) return FilmSamples(p.first_sample, n, false);
+    uvec2 b = pix / uvec2(WORKGROUP_X, WORKGROUP_Y);
+    if ((b.x + WITNESS_ROW_STEP * b.y + (frame.witness >> 16u)) % period != 0u) return FilmSamples(p.first_sample, n, false);
     return FilmSamples(2u * p.first_sample, 2u * n, true);
 }
 

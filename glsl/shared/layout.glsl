@@ -98,6 +98,9 @@
 
 #define WORKGROUP_X 8
 #define WORKGROUP_Y 8
+// Witness blocks (Frame.witness, src/film/split.rs) are workgroups; block (bx, by) is one where
+// (bx + WITNESS_ROW_STEP by + offset) mod period is 0, so that each row's witnesses are shifted.
+#define WITNESS_ROW_STEP 5
 
 // Analytic shape kinds (GpuShape.kind).
 #define SHAPE_SPHERE 0
@@ -292,11 +295,11 @@ struct Frame {
     uint light_floor;         // fewest samples a looped light takes (light_count_for; 0 or 1: the
                               // course's rule alone)
     uint witness;             // which pixels split their samples into two sequences (the
-                              // half-buffers; film_split, src/film/split.rs): bits 0-15 the period
-                              // M of witness blocks (8 x 8 pixels), bits 16-31 their offset. M 1:
-                              // every pixel, its samples alternating; else a pixel of block (bx, by)
-                              // with (bx + 5 by + offset) % M == 0 takes twice the samples, one
-                              // sequence each, and the others one sequence
+                              // half-buffers; film_samples, src/film/split.rs): bits 0-15 the period
+                              // M of witness blocks (workgroups), bits 16-31 their offset. M 1:
+                              // every pixel, its samples alternating; else a pixel of a witness
+                              // block (WITNESS_ROW_STEP) takes twice the samples, one sequence
+                              // each, and the others one sequence
     uint64_t profile;         // uint64 per PROFILE_REGIONS region per film slot: time by region
                               // in kernels built with ILLUM_PROFILE (shared/profile.glsl; 0: none)
 };

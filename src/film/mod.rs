@@ -423,10 +423,13 @@ pub fn resolve(
         rays += p[BEAUTY_SQ + 3] as u64;
     }
     film.variance = Some(variance);
-    let w = width as usize;
+    // A witness pixel takes twice the render's samples.
     let expected = |i: usize| {
-        let (x, y) = ((i % w) as u32, (i / w) as u32);
-        split.samples(origin.0 + x, origin.1 + y, spp)
+        if split.witnesses() && splits[i] {
+            2 * spp
+        } else {
+            spp
+        }
     };
     if counts.iter().enumerate().any(|(i, &c)| c != expected(i)) {
         film.samples = Some(counts.iter().map(|&c| c as f32).collect());

@@ -4,22 +4,23 @@
 //! Two independent sequences are what an unbiased error estimate needs, but a pixel whose samples
 //! alternate between them is stratified over half its samples only, which costs 1.0–1.6× of
 //! relMSE at equal samples (docs/performance-sampling.md, "What the half-buffer split costs").
-//! So in an image of at least [`WITNESS_BLOCKS_MIN`] blocks of 8 × 8 pixels, only one block in
-//! [`WITNESS_PERIOD`] is a witness: its pixels take both sequences' samples (twice the others'),
+//! So in an image of at least [`WITNESS_BLOCKS_MIN`] blocks of 8 × 8 pixels (workgroups, so that no
+//! SIMD group holds witnesses and other pixels, which take unequal sample counts), only one block
+//! in [`WITNESS_PERIOD`] is a witness: its pixels take both sequences' samples (twice the others'),
 //! the other pixels the first sequence's alone. A witness's two halves are then two independent
 //! renders of what every other pixel renders, and their difference estimates the error of all
 //! of them. Smaller images (the pilots, tests) and adaptive sampling split every pixel's samples,
-//! as before.
+//! as before. The rule is glsl/film/film.glsl's `film_samples`, with the constants of
+//! glsl/shared/layout.glsl.
+
+use crate::layout::{WITNESS_ROW_STEP, WORKGROUP_X, WORKGROUP_Y};
 
 /// One block in this many is a witness (in images of [`WITNESS_BLOCKS_MIN`] blocks or more).
 pub const WITNESS_PERIOD: u32 = 16;
-/// The fewest 8 × 8 blocks an image has for witness blocks: 32 witnesses (2048 pixels) at least.
+/// The fewest blocks an image has for witness blocks: 32 witnesses (2048 pixels) at least.
 pub const WITNESS_BLOCKS_MIN: u32 = 32 * WITNESS_PERIOD;
-/// The side of a witness block: a workgroup (layout.glsl's WORKGROUP_X, WORKGROUP_Y), so that no
-/// SIMD group holds witnesses and other pixels, which take unequal sample counts.
-pub const WITNESS_BLOCK: u32 = 8;
 
-/// Frame.witness: the witness period (1: every pixel split) and offset.
+/// Frame.witness: the witness period (1: every pixel split) and offset. The default: every pixel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Split {
     period: u32,
@@ -37,7 +38,7 @@ impl Split {
     /// where the image is large enough, their offset drawn from the seed (each block is a witness
     /// with probability 1/16 over seeds, so that the estimate is unbiased for the whole image).
     pub fn of_image(width: u32, height: u32, seed: u64) -> Split {
-        let blocks = width.div_ceil(WITNESS_BLOCK) as u64 * height.div_ceil(WITNESS_BLOCK) as u64;
+        let blocks = width.div_ceil(WORKGROUP_X) as u64 * height.div_ceil(WORKGROUP_Y) as u64;
         if blocks < u64::from(WITNESS_BLOCKS_MIN) {
             return Split::ALL;
         }
@@ -77,8 +78,8 @@ impl Split {
         if self.period <= 1 {
             return true;
         }
-        let (bx, by) = (x / WITNESS_BLOCK, y / WITNESS_BLOCK);
-        (bx + 5 * by + self.offset) % self.period == 0
+        let (bx, by) = (x / WORKGROUP_X, y / WORKGROUP_Y);
+        (bx + WITNESS_ROW_STEP * by + self.offset) % self.period == 0
     }
 
     /// Whether only witness pixels split (the others take one sequence).
@@ -86,19 +87,16 @@ impl Split {
         self.period > 1
     }
 
-    /// The samples pixel (x, y) takes for `spp` of the render's: twice as many at a witness.
-    pub fn samples(self, x: u32, y: u32, spp: u32) -> u32 {
-        if self.witnesses() && self.splits(x, y) {
-            2 * spp
-        } else {
-            spp
-        }
-    }
-
     /// Each pixel's flag of a window at (x0, y0), `width` × `height`, row-major.
     pub fn window(self, x0: u32, y0: u32, width: u32, height: u32) -> Vec<bool> {
         (y0..y0 + height)
             .flat_map(|y| (x0..x0 + width).map(move |x| self.splits(x, y)))
             .collect()
+    }
+}
+
+impl Default for Split {
+    fn default() -> Split {
+        Split::ALL
     }
 }

@@ -103,13 +103,7 @@ pub fn part_info(
         frame: (scene.camera.width, scene.camera.height),
         spp: job.total_spp,
         seed: settings.seed,
-        witness: film::Split::of_render(
-            scene.camera.width,
-            scene.camera.height,
-            settings.seed,
-            settings.adaptive.is_some(),
-        )
-        .word(),
+        witness: out.stats.split.word(),
         scene_hash: scene_hash(scene),
         settings: settings_text(settings),
         trace: out.stats.trace.to_string(),

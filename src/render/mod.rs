@@ -82,6 +82,8 @@ pub struct RenderStats {
     /// Of `camera_samples`, those the witness blocks took beyond the render's spp (film::Split:
     /// their pixels take both sequences' samples).
     pub witness_samples: u64,
+    /// Which pixels split their samples into the half-buffers (what a job's part records).
+    pub split: crate::film::Split,
     /// Camera samples whose beauty was NaN or infinite (counted, then replaced by 0).
     pub non_finite_samples: u64,
     /// Rays traced: camera rays and shadow rays.
@@ -120,6 +122,7 @@ impl RenderStats {
             submissions: o.submissions,
             spp: o.done,
             camera_samples: r.counts.iter().map(|&c| u64::from(c)).sum(),
+            split: setup.split,
             witness_samples: if setup.split.witnesses() {
                 r.counts
                     .iter()

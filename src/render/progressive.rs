@@ -20,6 +20,9 @@ pub struct Progressive<'p> {
     progress: Progress,
     setup_seconds: f64,
     started: Instant,
+    /// Which pixels of the window split their samples (film::Split; the same for every camera
+    /// of the run's size and seed), for [`Peek`].
+    split: Vec<bool>,
 }
 
 /// The sums of a render in progress as a host reads them for display: the exact sums of the
@@ -30,7 +33,7 @@ pub struct Peek<'a> {
     /// Samples per pixel they hold.
     pub spp: u32,
     /// Which pixels of the window split their samples into the half-buffers (film::Split).
-    pub split: Vec<bool>,
+    pub split: &'a [bool],
 }
 
 impl Peek<'_> {
@@ -61,9 +64,13 @@ impl Renderer {
         };
         let (settings, _) = self.decide_allocation(prepared, camera, &settings)?;
         let run = Run::new(self, prepared, camera, &settings, 1)?;
-        let progress = run
-            .blocking(self.context(), &settings)
-            .start(settings.seed)?;
+        let blocking = run.blocking(self.context(), &settings);
+        let progress = blocking.start(settings.seed)?;
+        let w = blocking.window;
+        let split = blocking
+            .setup
+            .split
+            .window(w.x0, w.y0, w.width(), w.height());
         Ok(Progressive {
             renderer: self,
             prepared,
@@ -72,6 +79,7 @@ impl Renderer {
             run: Some(run),
             progress,
             started,
+            split,
         })
     }
 }
@@ -134,13 +142,11 @@ impl Progressive<'_> {
 
     /// The sums so far, for display (reads the block in progress back from the device).
     pub fn peek(&self) -> Result<Peek<'_>> {
-        let b = self.blocking();
-        let w = b.window;
         Ok(Peek {
             sums: self.progress.sums(),
-            block: b.block_in_progress(&self.progress)?,
+            block: self.blocking().block_in_progress(&self.progress)?,
             spp: self.done(),
-            split: b.setup.split.window(w.x0, w.y0, w.width(), w.height()),
+            split: &self.split,
         })
     }
 
