@@ -53,6 +53,7 @@ class Render:
     emission: npt.NDArray[np.float32]
     variance: npt.NDArray[np.float32] | None
     samples: npt.NDArray[np.float32]
+    """Samples each pixel took: a job's of its own range; witness pixels twice the spp."""
     aovs: dict[str, npt.NDArray[np.float32]]
     metadata: dict[str, str]
     report: dict[str, npt.NDArray[np.float64]]

@@ -257,7 +257,15 @@ fn merge(py: Python<'_>, parts: &Bound<'_, PyList>) -> PyResult<Render> {
         })
         .map_err(err)?;
     let meta = illum::cli::merge::merged_metadata(&m, n);
-    Render::from_film(py, m.film, meta, m.spp, false, &[])
+    Render::from_film(
+        py,
+        m.film,
+        meta,
+        m.spp,
+        (m.split, m.spp, (0, 0)),
+        false,
+        &[],
+    )
 }
 
 /// A `trace=` argument: auto, rayquery or bvh, as `--trace` takes it.
@@ -695,7 +703,8 @@ struct Render {
     /// The per-pixel variance of the beauty mean, or None.
     #[pyo3(get)]
     variance: Py<PyAny>,
-    /// Samples each pixel took.
+    /// Samples each pixel took: a job's of its own range, and at witness pixels twice the
+    /// render's spp (src/film/split.rs).
     #[pyo3(get)]
     samples: Py<PyAny>,
     /// The integrator's AOV planes by name (e.g. Direct, IndirectDiffuse, Reflection).
@@ -737,7 +746,20 @@ impl Render {
     ) -> PyResult<Render> {
         let film = std::mem::replace(&mut out.film, Film::new(0, 0));
         let interrupted = stopped || out.stats.interrupted;
-        let mut r = Render::from_film(py, film, meta, out.stats.spp, interrupted, &out.passes)?;
+        // What each pixel took: a job's own samples over its window, else the render's.
+        let (taken, origin) = out.job.as_ref().map_or((out.stats.spp, (0, 0)), |j| {
+            (j.range.1 - j.range.0, (j.sums.window.x0, j.sums.window.y0))
+        });
+        let counts = (out.stats.split, taken, origin);
+        let mut r = Render::from_film(
+            py,
+            film,
+            meta,
+            out.stats.spp,
+            counts,
+            interrupted,
+            &out.passes,
+        )?;
         r.job = Some(out);
         Ok(r)
     }
@@ -747,6 +769,7 @@ impl Render {
         film: Film,
         meta: ImageMetadata,
         spp: u32,
+        (split, taken, (x0, y0)): (illum::film::Split, u32, (u32, u32)),
         interrupted: bool,
         passes: &[illum::render::PassReport],
     ) -> PyResult<Render> {
@@ -764,7 +787,14 @@ impl Render {
                 .unbind())
         };
         let has_counts = film.samples.is_some();
-        let counts = film.samples.unwrap_or_else(|| vec![spp as f32; w * h]);
+        // Without a SampleCount plane every pixel took spp samples, but for witness pixels twice.
+        let counts = film.samples.unwrap_or_else(|| {
+            split
+                .counts(x0, y0, w as u32, h as u32, taken)
+                .into_iter()
+                .map(|c| c as f32)
+                .collect()
+        });
         let aovs = PyDict::new(py);
         for AovPlane { name, rgb: plane } in film.aovs {
             aovs.set_item(name, rgb(plane)?)?;

@@ -163,6 +163,30 @@ def rss_bytes():
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
+def test_samples_counts_the_witness_blocks_twice():
+    # 256 x 192 is 32 x 24 blocks of 8 x 8, past the 512 at which only witness blocks split their
+    # samples (docs/techniques.md): one block in 16, (bx + 5 by + offset) mod 16 = 0, takes both
+    # sequences' samples, twice the others'.
+    s = illum.load(INTERIOR)
+    whole = s.render(spp=2, seed=5, width=256, integrator="direct")
+    n = whole.samples
+    assert n.shape == (192, 256) and set(np.unique(n)) == {2.0, 4.0}
+    blocks = n.reshape(24, 8, 32, 8).transpose(0, 2, 1, 3).reshape(24, 32, 64)
+    assert (blocks == blocks[..., :1]).all()   # one count a block
+    witness = blocks[..., 0] == 4.0
+    assert witness.sum() == 24 * 32 // 16
+    by, bx = np.nonzero(witness)
+    assert len(set((bx + 5 * by) % 16)) == 1
+    parts = [s.render(spp=3, seed=5, width=256, integrator="direct", samples=r)
+             for r in [(0, 1), (1, 3)]]
+    whole = s.render(spp=3, seed=5, width=256, integrator="direct")
+    n = n / 2 * 3
+    assert np.array_equal(whole.samples, n)
+    assert np.array_equal(parts[0].samples, n / 3) and np.array_equal(parts[1].samples, n / 3 * 2)
+    merged = illum.merge(parts)
+    assert np.array_equal(merged.samples, n) and np.array_equal(merged.beauty, whole.beauty)
+
+
 def test_loops_of_renders_do_not_grow_memory():
     # A direct render's film takes 656 bytes a pixel on the host (src/film/memory.rs): 2 MB at
     # 64x48. Keeping one per render would grow 2 MB a render; allow a tenth of that.

@@ -87,6 +87,16 @@ impl Split {
         self.period > 1
     }
 
+    /// The samples each pixel of a window at (x0, y0), `width` × `height` (row-major), takes in
+    /// a render of `spp` samples a pixel: twice that at witness pixels.
+    pub fn counts(self, x0: u32, y0: u32, width: u32, height: u32, spp: u32) -> Vec<u32> {
+        let witnesses = self.witnesses();
+        self.window(x0, y0, width, height)
+            .into_iter()
+            .map(|s| if witnesses && s { 2 * spp } else { spp })
+            .collect()
+    }
+
     /// Each pixel's flag of a window at (x0, y0), `width` × `height`, row-major.
     pub fn window(self, x0: u32, y0: u32, width: u32, height: u32) -> Vec<bool> {
         (y0..y0 + height)

@@ -136,6 +136,8 @@ pub struct Merged {
     pub non_finite_samples: u64,
     pub clamped_samples: u64,
     pub rays: u64,
+    /// Which pixels split their samples (the parts' `illum.witness`).
+    pub split: film::Split,
 }
 
 /// A part's file and header: all that the checks need.
@@ -422,12 +424,13 @@ impl Accumulator {
 
     fn finish(self, headers: &[PartHeader]) -> Merged {
         let f = &headers[0].info;
+        let split = film::Split::from_word(f.witness);
         let r = film::resolve(
             &self.sums,
             &self.aov_planes,
             (self.width, self.height),
             f.spp,
-            film::Split::from_word(f.witness),
+            split,
             (0, 0),
         );
         let mut devices: Vec<String> = headers.iter().map(|p| p.info.device.clone()).collect();
@@ -445,6 +448,7 @@ impl Accumulator {
             non_finite_samples: r.non_finite_samples,
             clamped_samples: r.clamped_samples,
             rays: r.rays,
+            split,
         }
     }
 }
