@@ -40,6 +40,9 @@ pub struct Blocking<'a> {
     /// Wall seconds spent for the render before its first seed (the allocation pilot): the
     /// first seed's [`Blocking::start`] counts them as rendering, under its time budget too.
     pub head_start: std::cell::Cell<f64>,
+    /// A render nobody watches (the allocation pilot's candidates): its samples in one pass,
+    /// without the passes' submissions and waits, which were half a small candidate's time.
+    pub whole: bool,
 }
 
 /// Where one seed's render stands: what [`Blocking::render_seed`] runs to the end, and what an
@@ -277,7 +280,11 @@ impl Blocking<'_> {
         if p.done >= end {
             return None;
         }
-        let mut pass = (p.done / 2).max(1).min(end - p.done);
+        let mut pass = if self.whole && self.settings.time.is_none() {
+            end - p.done
+        } else {
+            (p.done / 2).max(1).min(end - p.done)
+        };
         if let Some(t) = self.settings.time {
             if p.wall >= t {
                 return None;

@@ -145,6 +145,7 @@ impl Run {
             profile: self.profile.as_ref(),
             height: self.height,
             head_start: std::cell::Cell::new(0.0),
+            whole: false,
         }
     }
 

@@ -13,6 +13,7 @@
 //! the image, so the allocation is independent of the image's samples and the image stays
 //! unbiased: every allocation is an unbiased estimator (MIS weights use the counts taken).
 
+use super::blocking::Blocking;
 use super::{PreparedScene, RenderSettings, Renderer};
 use crate::error::Result;
 use crate::layout::{
@@ -434,9 +435,11 @@ impl Renderer {
                        s: &RenderSettings|
          -> Result<Option<Measured>> {
             run.set_camera(ctx, prepared, cam, s)?;
-            let o = run
-                .blocking(ctx, s)
-                .render_seed(PILOT_SEED, &mut |_, _| {})?;
+            let o = Blocking {
+                whole: true,
+                ..run.blocking(ctx, s)
+            }
+            .render_seed(PILOT_SEED, &mut |_, _| {})?;
             let r = &o.resolved;
             let pixels = crate::metrics::estimated_relmse_pixels(
                 &r.film.beauty,
