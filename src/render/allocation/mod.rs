@@ -40,10 +40,13 @@ pub const LEAST_CANDIDATES: f64 = 4.0;
 /// PILOT_MIN_PIXELS, measures the rate that sizes the others (none when the share would not
 /// afford LEAST_CANDIDATES at that rate), and the search stops when the share is spent.
 pub const PILOT_TIME_SHARE: f64 = 0.06;
-/// A candidate replaces the best so far only if its estimated cost × relMSE is below this
-/// share of the best's: the pilot's estimates scatter by 3–20% between seeds
-/// (docs/allocation.md), and the integrator's counts stand where the pilot cannot tell.
-pub const MARGIN: f64 = 0.85;
+/// The loop or the tree (step 0) replaces the other only if its estimated cost × relMSE is
+/// below this share of the other's as well as Z_SELECTION standard errors below it. The count
+/// moves have no such margin: two standard errors of the paired difference decide them. The
+/// pilot's pixels dilute what varies within an image pixel into every candidate alike, which
+/// pulls a true gain towards 1, not past it; with a margin of 0.85 the pilot kept moves of
+/// 0.86-0.88 that were worth 1.13-1.35x at equal time (docs/allocation.md, stop 55).
+pub const SELECTION_MARGIN: f64 = 0.85;
 /// The pilot's seed, the same for every seed of the image: the allocation is a property of the
 /// scene and settings, not of one render's random numbers.
 pub const PILOT_SEED: u64 = 0xA110_CA7E_5EED_0001;
@@ -184,11 +187,11 @@ impl Measured {
         (sa / n, sb / n, (var / n).sqrt())
     }
 
-    /// Whether it costs less than `best` by more than MARGIN and by more than `z` standard
-    /// errors of their paired difference: a move the pilot's noise does not explain.
-    fn beats(&self, best: &Measured, z: f64) -> bool {
+    /// Whether it costs less than `margin` × `best`'s and by more than `z` standard errors of
+    /// their paired difference: a move the pilot's noise does not explain.
+    fn beats(&self, best: &Measured, z: f64, margin: f64) -> bool {
         let (mine, theirs, se) = self.against(best);
-        mine < MARGIN * theirs && theirs - mine > z * se
+        mine < margin * theirs && theirs - mine > z * se
     }
 }
 
@@ -540,7 +543,11 @@ impl Renderer {
                         );
                     }
                     if let Some(m) = m
-                        && m.beats(&best_measured, if step == 0 { Z_SELECTION } else { Z })
+                        && if step == 0 {
+                            m.beats(&best_measured, Z_SELECTION, SELECTION_MARGIN)
+                        } else {
+                            m.beats(&best_measured, Z, 1.0)
+                        }
                     {
                         (best, best_measured) = (c, m);
                         if switch(step) {

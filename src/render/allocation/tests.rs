@@ -46,19 +46,27 @@ fn a_candidate_must_beat_the_best_by_more_than_its_noise() {
         rays: 1.0,
     };
     // The same errors: no move.
-    assert!(!best.beats(&best, Z));
+    assert!(!best.beats(&best, Z, 1.0));
     // Half the error at the same rays, pixel for pixel: a move.
     let half = Measured {
         pixels: best.pixels.iter().map(|x| x / 2.0).collect(),
         rays: 1.0,
     };
-    assert!(half.beats(&best, Z));
+    assert!(half.beats(&best, Z, 1.0));
+    // 12% less at the same rays, in every pixel alike (the paired difference steady): a count
+    // move, but not past the loop-or-tree margin.
+    let steady = Measured {
+        pixels: best.pixels.iter().map(|x| x * 0.88).collect(),
+        rays: 1.0,
+    };
+    assert!(steady.beats(&best, Z, 1.0));
+    assert!(!steady.beats(&best, Z_SELECTION, SELECTION_MARGIN));
     // Half the error at three times the rays (cost 0.5 x 4 against 1 x 2): no move.
     let costly = Measured {
         rays: 3.0,
         ..half.clone()
     };
-    assert!(!costly.beats(&best, Z));
+    assert!(!costly.beats(&best, Z, 1.0));
     // 20% less on average, but from a few pixels' noise: the paired difference's standard
     // error is larger than the gain.
     let noisy = Measured {
@@ -72,16 +80,16 @@ fn a_candidate_must_beat_the_best_by_more_than_its_noise() {
     };
     let (mine, theirs, se) = noisy.against(&best);
     assert!(
-        mine < MARGIN * theirs && theirs - mine < Z * se,
+        mine < SELECTION_MARGIN * theirs && theirs - mine < Z * se,
         "{mine} {theirs} {se}"
     );
-    assert!(!noisy.beats(&best, Z));
+    assert!(!noisy.beats(&best, Z, 1.0));
     // One standard error (the loop against the tree) lets it through.
-    assert!(noisy.beats(&best, Z_SELECTION));
+    assert!(noisy.beats(&best, Z_SELECTION, SELECTION_MARGIN));
     // Pixels left out (NaN) on either side are left out of both.
     let mut gaps = half.clone();
     gaps.pixels[3] = f64::NAN;
-    assert!(gaps.beats(&best, Z));
+    assert!(gaps.beats(&best, Z, 1.0));
 }
 
 #[test]
