@@ -413,6 +413,12 @@ fn an_address_space_limit_bands_or_refuses_the_render_and_never_aborts() {
             err.contains("address-space limit") && !out.exists(),
             "{err}"
         ),
-        c => panic!("exit {c:?} under an address-space limit: {err}"),
+        c => {
+            use std::os::unix::process::ExitStatusExt;
+            panic!(
+                "exit {c:?} (signal {:?}) under an address-space limit: {err}",
+                o.status.signal()
+            )
+        }
     }
 }
