@@ -423,15 +423,8 @@ pub fn resolve(
         rays += p[BEAUTY_SQ + 3] as u64;
     }
     film.variance = Some(variance);
-    // A witness pixel takes twice the render's samples.
-    let expected = |i: usize| {
-        if split.witnesses() && splits[i] {
-            2 * spp
-        } else {
-            spp
-        }
-    };
-    if counts.iter().enumerate().any(|(i, &c)| c != expected(i)) {
+    // Counts other than the split's own (a witness pixel twice the render's samples): adaptive.
+    if counts != split.counts(origin.0, origin.1, width, height, spp) {
         film.samples = Some(counts.iter().map(|&c| c as f32).collect());
     }
     Resolved {
